@@ -27,10 +27,12 @@ def identifier(name: str) -> str:
 
 
 def render_forms(shield: Shield, forms: Sequence[str], *, bindings: Any = None,
-                 bindings_file: str | None = None, compiled: Sequence[Any] = ()
-                 ) -> dict[str, str | bytes]:
+                 bindings_file: str | None = None, compiled: Sequence[Any] = (),
+                 node: tuple[Shield, int] | None = None) -> dict[str, str | bytes]:
     """Every file of each form of ``forms``: relative path -> text (or bytes, the binding
-    file copied), in order; nothing is written.
+    file copied), in order; nothing is written. ``node``: the ROS 2 node's shield and the
+    ticks early it meets each deadline (:func:`fretc.shield.emit_ros2.node_margin`; default
+    ``shield`` itself, no margin).
 
     Raises:
         ShieldError: a form that needs what was not given (the ros2 form: bindings and
@@ -51,7 +53,8 @@ def render_forms(shield: Shield, forms: Sequence[str], *, bindings: Any = None,
         elif form == "ros2":
             from fretc.shield.emit_ros2 import render_ros2
 
-            files.update(render_ros2(shield, base, bindings, bindings_file))
+            on_bus, margin = node if node is not None else (shield, 0)
+            files.update(render_ros2(on_bus, base, bindings, bindings_file, margin))
         elif form == "gwendolen":
             from fretc.shield.emit_gwendolen import render_gwendolen
 
@@ -63,7 +66,8 @@ def render_forms(shield: Shield, forms: Sequence[str], *, bindings: Any = None,
 
 def write_forms(shield: Shield, forms: Sequence[str], out_dir: Path, *,
                 bindings: Any = None, bindings_file: str | None = None,
-                compiled: Sequence[Any] = ()) -> list[Path]:
+                compiled: Sequence[Any] = (), node: tuple[Shield, int] | None = None
+                ) -> list[Path]:
     """Write each form of ``forms`` into ``out_dir`` (made when missing); the paths written,
     in order. Every form is made before any file is written: a form refused leaves the
     folder as it was (no partial output).
@@ -71,7 +75,7 @@ def write_forms(shield: Shield, forms: Sequence[str], out_dir: Path, *,
     Raises:
         ShieldError: as :func:`render_forms`."""
     files = render_forms(shield, forms, bindings=bindings, bindings_file=bindings_file,
-                         compiled=compiled)
+                         compiled=compiled, node=node)
     output_folder(out_dir)
     written: list[Path] = []
     for fname, content in files.items():  # (never through a link planted in out_dir)

@@ -27,11 +27,25 @@ The node (:func:`node_source`):
 
 Message types come from the binding file's ``[shield] types`` (or ``[types]``) table (topic ->
 ``pkg/msg/Type``).
+
+**On time on the bus by construction.** Another node sees the node's answers later than the
+shield's ticks: a reader (a recorder, the audit's ticks, a watch) samples at another phase,
+so an answer may look one tick late, and the node itself takes time from a message's
+receipt to its corrected messages published. So the node's shield meets every ``within``
+deadline :func:`node_margin` ticks early, from the tick period, the sampling phase (one
+period) and the node's latency budget (``[shield] latency_budget`` of the binding file,
+default :data:`LATENCY_BUDGET`): with a 100 ms tick and 20 ms, 2 ticks (R2 within 8 ticks,
+R6 within 3). The node measures its latency (receipt to published, every tick) and reports
+it on ``/diagnostics`` (``latency_ms``, ``latency_max_ms``, ``latency_budget_ms``,
+``margin_ticks``), with WARN when a tick took longer than the budget: the margin no longer
+covers it. ``fretc shield --prove`` states this timing and proves the node's shield too.
 """
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
+from fractions import Fraction
 from pathlib import Path
 from typing import Any
 
@@ -41,7 +55,42 @@ from fretc.shield.messages import proposals_of
 from fretc.shield.plan import ShieldError
 from fretc.signals.bindings.spec import Bindings
 
-__all__ = ["render_ros2", "node_source"]
+__all__ = ["render_ros2", "node_source", "node_margin", "latency_budget", "LATENCY_BUDGET"]
+
+#: the node's latency budget (s) without ``[shield] latency_budget``: about ten times what
+#: bench/bench_ros2.py measures for the node's own work on this machine (p99 3 ms from the
+#: scan's publication to the command's arrival, the node's part about 1.2 ms at p50)
+LATENCY_BUDGET = Fraction(1, 50)
+
+
+def node_margin(period: Fraction, budget: Fraction = LATENCY_BUDGET) -> int:
+    """The ticks early the node meets each ``within`` deadline (module docstring): the
+    sampling phase (a whole period) and the latency ``budget`` (s), in ticks of ``period``
+    (s), rounded up."""
+    return math.ceil((period + budget) / period)
+
+
+def latency_budget(bindings_file: str | None) -> Fraction:
+    """``[shield] latency_budget`` of the binding file (a duration, ``"20 ms"``), else
+    :data:`LATENCY_BUDGET`.
+
+    Raises:
+        ShieldError: not a duration, or not positive."""
+    if bindings_file is None:
+        return LATENCY_BUDGET
+    text = _shield_table(bindings_file).get("latency_budget")
+    if text is None:
+        return LATENCY_BUDGET
+    from fretc.common.units import parse_duration
+
+    try:
+        ns = parse_duration(text) if isinstance(text, str) else None
+    except ValueError:
+        ns = None
+    if ns is None or ns <= 0:
+        raise ShieldError(f"{bindings_file}: [shield] latency_budget must be a positive "
+                          f"duration (\"20 ms\"), not {text!r}")
+    return Fraction(int(ns), 10**9)
 
 
 def _shield_table(bindings_file: str) -> dict[str, Any]:
@@ -103,18 +152,23 @@ def _topics(shield: Shield, bindings: Bindings, proposals: dict[str, str]
 
 def node_source(pkg: str, module: str, bindings_name: str, types: dict[str, str],
                 inputs: list[str], proposals: dict[str, str], outputs: list[str],
-                period_ns: int, tick: str | None) -> str:
-    """The node's Python source (module docstring; ``templates/shield_node.py.j2``)."""
+                period_ns: int, tick: str | None, margin: int = 0,
+                budget_ns: int = 0) -> str:
+    """The node's Python source (module docstring; ``templates/shield_node.py.j2``):
+    ``margin`` the ticks early its shield meets each deadline, ``budget_ns`` its latency
+    budget."""
     from fretc.compiler.codegen import _env  # lazy: Jinja2 only when the form is written
 
     return str(_env().get_template("shield_node.py.j2").render(
         pkg=pkg, module=module, bindings_name=bindings_name, types=types, inputs=inputs,
-        proposals=proposals, outputs=outputs, period_ns=period_ns, tick=tick))
+        proposals=proposals, outputs=outputs, period_ns=period_ns, tick=tick, margin=margin,
+        budget_ns=budget_ns))
 
 
 def render_ros2(shield: Shield, base: str, bindings: Bindings | None,
-                bindings_file: str | None) -> dict[str, str]:
-    """``{relative path: text}`` of the package (module docstring).
+                bindings_file: str | None, margin: int = 0) -> dict[str, str]:
+    """``{relative path: text}`` of the package (module docstring); ``shield`` the node's
+    (deadlines ``margin`` ticks early: :func:`node_margin`, made by the caller).
 
     Raises:
         ShieldError: no binding file, a topic without a type in its ``[types]`` or with a
@@ -154,8 +208,9 @@ def render_ros2(shield: Shield, base: str, bindings: Bindings | None,
     _check_types(types, bindings, bindings_file)
     period_ns = int(shield.period * 10**9)
     deps = sorted({t.split("/")[0] for t in types.values()} | {"diagnostic_msgs", "rclpy"})
+    budget = latency_budget(bindings_file)
     node = node_source(pkg, module, f"{base}.bindings.toml", types, inputs, proposals,
-                       outputs, period_ns, tick)
+                       outputs, period_ns, tick, margin, int(budget * 10**9))
     return {
         f"{pkg}/package.xml": _package_xml(pkg, shield, deps),
         f"{pkg}/setup.py": _setup_py(pkg, base),

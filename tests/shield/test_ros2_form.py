@@ -60,3 +60,38 @@ def test_without_types_the_form_is_refused(tmp_path):
     got = CliRunner().invoke(main, ["shield", *ARGS, "--emit", "ros2", "-o",
                                     str(tmp_path / "out2")])
     assert got.exit_code == 2 and "needs the binding file" in got.output, got.output
+
+
+def test_the_node_meets_each_deadline_early_by_its_period_phase_and_latency(tmp_path):
+    """On a bus the node's answers reach a reader up to a tick late (its sampling phase)
+    plus the node's latency: the package's shield meets each deadline that many ticks
+    early without a flag (100 ms ticks and the 20 ms budget: 2 ticks; a budget of 250 ms
+    in [shield] latency_budget: 4), the node carries its margin and budget, and --prove
+    states the timing and proves the node's shield too (issue 83)."""
+    import fractions
+
+    from fretc.shield.emit_ros2 import node_margin
+
+    assert node_margin(fractions.Fraction(1, 10)) == 2
+    assert node_margin(fractions.Fraction(1, 10), fractions.Fraction(1, 4)) == 4
+    got = CliRunner().invoke(main, ["shield", *ARGS, "-b",
+                                    str(REPO / "requirements" / "safe_ros.bindings.toml"),
+                                    "--prove", "--emit", "ros2", "-o", str(tmp_path / "a")])
+    assert got.exit_code == 0, got.output
+    assert "each 'within' deadline is met 2 tick(s) early" in got.output
+    assert "the ROS 2 node's shield (deadlines 2 tick(s) early): every enforced " \
+           "requirement holds" in got.output
+    pkg = tmp_path / "a" / "safe_ros_shield_ros2" / "safe_ros_shield_ros2"
+    node = (pkg / "shield_node.py").read_text()
+    assert "MARGIN_TICKS = 2" in node and "LATENCY_BUDGET_NS = 20000000" in node
+    assert "upon too_close agilex_agent shall within 1 second satisfy stopped " \
+           "[a deadline 2 tick(s) early: 8 ticks]" in (pkg / "safe_ros_shield.py").read_text()
+    b = tmp_path / "b.bindings.toml"
+    b.write_text((REPO / "requirements" / "safe_ros.bindings.toml").read_text().replace(
+        "[shield]\n", '[shield]\nlatency_budget = "250 ms"\n'), encoding="utf-8")
+    got = CliRunner().invoke(main, ["shield", *ARGS, "-b", str(b), "--emit", "ros2", "-o",
+                                    str(tmp_path / "b")])
+    assert got.exit_code == 0, got.output
+    node = (tmp_path / "b" / "safe_ros_shield_ros2" / "safe_ros_shield_ros2" /
+            "shield_node.py").read_text()
+    assert "MARGIN_TICKS = 4" in node and "LATENCY_BUDGET_NS = 250000000" in node

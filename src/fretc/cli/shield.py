@@ -17,7 +17,9 @@ unrealizable set: the message says why).
 from __future__ import annotations
 
 import sys
+from collections.abc import Sequence
 from pathlib import Path
+from typing import Any
 
 import click
 
@@ -77,32 +79,14 @@ def shield_cmd(files: tuple[str, ...], inputs: str | None, outputs: str | None,
     proposed outputs unchanged when they keep every requirement winnable, and otherwise
     changes the fewest outputs needed (the Safety System of Safe-ROS, generated)."""
     from fretc.check.budget import Budget
-    from fretc.common.errors import FretcError
-    from fretc.compiler.build import compile_entries
     from fretc.fretish.fret_variables import fret_declarations
     from fretc.shield.build import ShieldUnknown, build_shield, parse_preferences, with_margin
     from fretc.shield.fallback import declared_fallback, parse_fallback
 
     if forms and out_dir is None:
         raise click.UsageError("--emit needs -o DIR")
-    rs = requirement_set(files, bindings_file)
-    as_written, entries = rs.as_written, rs.entries
-    compiled = compile_entries(entries)
-    assumed = compile_entries(requirement_set(assume, bindings_file).entries) if assume else []
-    taken = {c.id for c in compiled}
-    twice = sorted({c.id for c in assumed if c.id in taken})
-    if twice:
-        click.echo(shown(f"error: {', '.join(twice)}: both a requirement and an assumption "
-                         "(--assume): give each one id"), err=True)
-        sys.exit(2)
-    bad = [c for c in [*compiled, *assumed] if c.error is not None]
-    for c in bad:
-        click.echo(shown(str(c.error)), err=True)
-    if bad:
-        sys.exit(2)
-    if not compiled:
-        click.echo(shown(f"error: no requirement in {', '.join(files)}"), err=True)
-        sys.exit(2)
+    rs, compiled, assumed = _read(files, assume, bindings_file)
+    as_written = rs.as_written
     ins = names_of(inputs)
     outs = names_of(outputs)
     if ins is None:
@@ -117,12 +101,17 @@ def shield_cmd(files: tuple[str, ...], inputs: str | None, outputs: str | None,
     declared = parse_fallback(fallback)
     if declared is None:
         declared = declared_fallback(bindings_file)
+
+    def make(ticks: int) -> Any:  # (the shield with every deadline ``ticks`` early)
+        return build_shield(with_margin(compiled, ticks), ins, outs, bindings=bindings,
+                            prefer=parse_preferences(prefer),
+                            budget=Budget(work=budget, memory=memory_budget, cpu=query_cpu),
+                            name=name or Path(files[0]).stem, fallback=declared,
+                            assumptions=assumed)
+
     try:
-        shield = build_shield(with_margin(compiled, margin), ins, outs, bindings=bindings,
-                              prefer=parse_preferences(prefer),
-                              budget=Budget(work=budget, memory=memory_budget, cpu=query_cpu),
-                              name=name or Path(files[0]).stem, fallback=declared,
-                              assumptions=assumed)
+        shield = make(margin)
+        node = _node_shield(make, shield, margin, bindings_file) if "ros2" in forms else None
     except ShieldUnknown as exc:
         click.echo(shown(f"unknown: {exc}"), err=True)
         sys.exit(1)
@@ -140,22 +129,101 @@ def shield_cmd(files: tuple[str, ...], inputs: str | None, outputs: str | None,
         proof = prove_shield(shield, [*compiled, *assumed])
         click.echo(shown(proof.text()))
         code = 0 if proof.holds else 1
+        code = max(code, _timing(shield, node, [*compiled, *assumed], bindings_file))
     if forms:
-        from fretc.shield.emit import write_forms
-
         assert out_dir is not None  # refused above without -o
-        try:
-            written = write_forms(shield, forms, Path(out_dir), bindings=bindings,
-                                  bindings_file=bindings_file, compiled=compiled)
-        except OSError as exc:  # (-o names a file, a folder that cannot be written, a link
-            # where a folder goes: fretc.common.outputs.OutputError)
-            raise click.UsageError(f"cannot write the forms into -o {out_dir}: "
-                                   f"{exc.strerror or exc}") from None
-        except FretcError:
-            raise
-        for path in written:
-            click.echo(shown(f"wrote {path}"))
+        _write(shield, forms, out_dir, bindings, bindings_file, compiled, node)
     sys.exit(code)
+
+
+def _read(files: Sequence[str], assume: Sequence[str], bindings_file: str | None
+          ) -> tuple[Any, list[Any], list[Any]]:
+    """The requirement set, its requirements and the assumptions (``--assume``) compiled;
+    exits 2 naming what cannot be compiled, an id both a requirement's and an assumption's,
+    or no requirement."""
+    from fretc.compiler.build import compile_entries
+
+    rs = requirement_set(files, bindings_file)
+    compiled = compile_entries(rs.entries)
+    assumed = compile_entries(requirement_set(assume, bindings_file).entries) if assume else []
+    taken = {c.id for c in compiled}
+    twice = sorted({c.id for c in assumed if c.id in taken})
+    if twice:
+        click.echo(shown(f"error: {', '.join(twice)}: both a requirement and an assumption "
+                         "(--assume): give each one id"), err=True)
+        sys.exit(2)
+    bad = [c for c in [*compiled, *assumed] if c.error is not None]
+    for c in bad:
+        click.echo(shown(str(c.error)), err=True)
+    if bad:
+        sys.exit(2)
+    if not compiled:
+        click.echo(shown(f"error: no requirement in {', '.join(files)}"), err=True)
+        sys.exit(2)
+    return rs, compiled, assumed
+
+
+def _write(shield: Any, forms: Sequence[str], out_dir: str, bindings: Any,
+           bindings_file: str | None, compiled: Sequence[Any],
+           node: tuple[Any, int] | None) -> None:
+    """Write the forms into ``out_dir`` and name each file written.
+
+    Raises:
+        click.UsageError: a folder that cannot be written."""
+    from fretc.common.errors import FretcError
+    from fretc.shield.emit import write_forms
+
+    try:
+        written = write_forms(shield, forms, Path(out_dir), bindings=bindings,
+                              bindings_file=bindings_file, compiled=compiled, node=node)
+    except OSError as exc:  # (-o names a file, a folder that cannot be written, a link
+        # where a folder goes: fretc.common.outputs.OutputError)
+        raise click.UsageError(f"cannot write the forms into -o {out_dir}: "
+                               f"{exc.strerror or exc}") from None
+    except FretcError:
+        raise
+    for path in written:
+        click.echo(shown(f"wrote {path}"))
+
+
+def _node_shield(make: Any, shield: Any, margin: int, bindings_file: str | None
+                 ) -> tuple[Any, int] | None:
+    """The ROS 2 node's shield and the ticks early it meets each deadline
+    (:func:`fretc.shield.emit_ros2.node_margin`, at least ``--margin``); None without a
+    period (the form refuses it then)."""
+    from fretc.shield.emit_ros2 import latency_budget, node_margin
+
+    if shield.period is None:
+        return None
+    ticks = max(margin, node_margin(shield.period, latency_budget(bindings_file)))
+    return (shield if ticks == margin else make(ticks)), ticks
+
+
+def _timing(shield: Any, node: tuple[Any, int] | None, compiled: Sequence[Any],
+            bindings_file: str | None) -> int:
+    """Print the timing ``--prove`` relies on, and prove the ROS 2 node's shield (its
+    deadlines early) when the form is written; 1 when that proof fails, else 0."""
+    from fretc.shield.emit_ros2 import latency_budget, node_margin
+    from fretc.shield.prove import prove_shield
+
+    if shield.period is None:
+        click.echo("timing it relies on: the host steps one tick per tick of the requirements "
+                   "(they declare no period)")
+        return 0
+    ms = f"{float(shield.period * 1000):g} ms"
+    budget = latency_budget(bindings_file)
+    ticks = node[1] if node is not None else node_margin(shield.period, budget)
+    click.echo(f"timing it relies on: a tick every {ms}, its inputs read when it starts and "
+               f"its outputs decided in it; on a bus (--emit ros2) each 'within' deadline is "
+               f"met {ticks} tick(s) early: a reader at another phase sees the answers up to "
+               f"a tick late, and the node's latency is within its "
+               f"{float(budget * 1000):g} ms budget (measured, /diagnostics)")
+    if node is None or node[0] is shield:
+        return 0
+    proof = prove_shield(node[0], compiled)
+    click.echo(f"the ROS 2 node's shield (deadlines {ticks} tick(s) early): "
+               + ("every enforced requirement holds" if proof.holds else "NOT PROVED"))
+    return 0 if proof.holds else 1
 
 
 def _summary(shield) -> str:

@@ -1,0 +1,127 @@
+"""ROS 2 peers of the shield's bus test (tests/shield/test_ros2_bus.py), each run in a process
+of its own with ROS 2 Jazzy's rclpy on its default middleware; nothing here imports fretc.
+
+    python tests/shield/_bus_peers.py ROLE SECONDS [OUT]
+
+Roles:
+
+* ``lidar``: once its two readers match (the Safety System and the checker), ``/scan``
+  (sensor_msgs/LaserScan, 720 beams over 360 degrees as the simulated Scout Mini's, best
+  effort) every 100 ms: every range 0.5 m from 3 s to 6 s (an obstacle around the robot),
+  3 m otherwise, and none from 8 s on (the LiDAR falls silent); it exits after SECONDS.
+* ``controller``: once the Safety System subscribes, ``/cmd_vel`` (geometry_msgs/Twist,
+  reliable) every 100 ms proposing to drive on at 0.3 m/s, for SECONDS.
+* ``checker``: an independent node that writes, as JSON lines into OUT, each message it
+  receives on ``/scan`` (its least range), ``/cmd_vel_filtered`` (linear.x, angular.z),
+  ``/gwendolen_control`` (data) and ``/diagnostics`` (level, message, values) with its
+  receipt time: the middleware's ``received_timestamp`` (ns), when the message reached this
+  node (its callbacks run later, in the executor's order, not the messages'), for SECONDS.
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+import time
+
+import rclpy
+from rclpy.qos import QoSProfile, ReliabilityPolicy
+
+RELIABLE = QoSProfile(depth=10)
+BEST_EFFORT = QoSProfile(depth=10, reliability=ReliabilityPolicy.BEST_EFFORT)
+
+
+def _spin(node, seconds: float, step=None, period: float = 0.1) -> None:
+    """Spin ``node`` for ``seconds``, calling ``step(t)`` every ``period`` s (``t`` the
+    seconds since the start)."""
+    t0 = time.monotonic()
+    nxt = t0
+    while time.monotonic() - t0 < seconds:
+        now = time.monotonic()
+        if step is not None and now >= nxt:
+            step(now - t0)
+            nxt += period
+        rclpy.spin_once(node, timeout_sec=max(0.0, min(0.01, nxt - time.monotonic())))
+
+
+def _wait_for(node, publisher, count: int, limit: float = 60.0) -> None:
+    t0 = time.monotonic()
+    while publisher.get_subscription_count() < count and time.monotonic() - t0 < limit:
+        rclpy.spin_once(node, timeout_sec=0.05)
+
+
+def lidar(seconds: float, _out: str) -> None:
+    from sensor_msgs.msg import LaserScan
+
+    n = rclpy.create_node("lidar")
+    pub = n.create_publisher(LaserScan, "/scan", BEST_EFFORT)
+    _wait_for(n, pub, 2)
+    _spin(n, 1.0)
+
+    def step(t: float) -> None:
+        if t >= 8.0:
+            return
+        r = 0.5 if 3.0 <= t < 6.0 else 3.0
+        s = LaserScan(angle_min=-3.141592653589793, angle_increment=3.141592653589793 / 360,
+                      range_min=0.1, range_max=30.0, ranges=[r] * 720)
+        s.header.stamp = n.get_clock().now().to_msg()
+        pub.publish(s)
+
+    _spin(n, seconds, step)
+
+
+def controller(seconds: float, _out: str) -> None:
+    from geometry_msgs.msg import Twist
+
+    n = rclpy.create_node("controller")
+    pub = n.create_publisher(Twist, "/cmd_vel", RELIABLE)
+    _wait_for(n, pub, 1)
+    _spin(n, 1.0)
+
+    def step(_t: float) -> None:
+        tw = Twist()
+        tw.linear.x = 0.3
+        pub.publish(tw)
+
+    _spin(n, seconds, step)
+
+
+def checker(seconds: float, out: str) -> None:
+    from diagnostic_msgs.msg import DiagnosticArray
+    from geometry_msgs.msg import Twist
+    from sensor_msgs.msg import LaserScan
+    from std_msgs.msg import Bool
+
+    n = rclpy.create_node("checker")
+    with open(out, "w", encoding="utf-8") as fh:
+        def keep(topic: str, info, fields: dict) -> None:
+            fh.write(json.dumps({"topic": topic, "t": info["received_timestamp"],
+                                 **fields}) + "\n")
+
+        n.create_subscription(LaserScan, "/scan", lambda m, i: keep(
+            "/scan", i, {"min": min(m.ranges)}), BEST_EFFORT)
+        n.create_subscription(Twist, "/cmd_vel_filtered", lambda m, i: keep(
+            "/cmd_vel_filtered", i, {"x": m.linear.x, "z": m.angular.z}), BEST_EFFORT)
+        n.create_subscription(Bool, "/gwendolen_control", lambda m, i: keep(
+            "/gwendolen_control", i, {"data": bool(m.data)}), BEST_EFFORT)
+        n.create_subscription(DiagnosticArray, "/diagnostics", lambda m, i: keep(
+            "/diagnostics", i, {"level": int.from_bytes(m.status[0].level, "little")
+                                if isinstance(m.status[0].level, bytes)
+                                else int(m.status[0].level), "message": m.status[0].message,
+                                "values": {v.key: v.value for v in m.status[0].values}}),
+            BEST_EFFORT)
+        _spin(n, seconds)
+
+
+def main() -> None:
+    role, seconds = sys.argv[1], float(sys.argv[2])
+    out = sys.argv[3] if len(sys.argv) > 3 else ""
+    rclpy.init()
+    try:
+        {"lidar": lidar, "controller": controller, "checker": checker}[role](seconds, out)
+    finally:
+        rclpy.try_shutdown()
+
+
+if __name__ == "__main__":
+    main()
