@@ -83,8 +83,12 @@ def record(scenario: str, seed: int, output: str, ros1: bool, png: str | None, t
 @click.option("--ros1", is_flag=True, help="ROS 1 messages instead of ROS 2 (cdr).")
 @click.option("--wait/--no-wait", default=True, show_default=True,
               help="Start the run once a client subscribed.")
-def serve(scenario: str, seed: int, rate: float, host: str, port: int, ros1: bool, wait: bool
-         ) -> None:
+@click.option("--safety", default="sif", show_default=True, metavar="sif|shield:DIR",
+              help="The Safety System: the hand-written SIF and cmd_vel_interceptor, or the "
+              "shield fretc shield --emit python -b BINDINGS wrote into DIR (a shielded run "
+              "watched live).")
+def serve(scenario: str, seed: int, rate: float, host: str, port: int, ros1: bool, wait: bool,
+          safety: str) -> None:
     """Run one scenario live over the Foxglove WebSocket protocol (foxglove-sdk)."""
     def ready(server):
         click.echo(f"serving {scenario} on {server.url} at {rate:g}x"
@@ -92,9 +96,11 @@ def serve(scenario: str, seed: int, rate: float, host: str, port: int, ros1: boo
 
     try:
         res = do_serve(scenario, seed=seed, rate=rate, host=host, port=port, ros1=ros1,
-                       wait=wait, on_ready=ready)
+                       wait=wait, on_ready=ready, safety=safety)
     except KeyboardInterrupt:
         return
+    except ValueError as exc:  # (a --safety that names no shield folder)
+        raise click.BadParameter(str(exc), param_hint="--safety") from None
     except RuntimeError as exc:  # no foxglove-sdk (the watch extra): one line, exit 2
         click.echo(f"error: {exc}", err=True)
         raise SystemExit(2) from None

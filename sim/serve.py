@@ -80,13 +80,20 @@ def serve(scenario: str, *, seed: int = 1, rate: float = 1.0, host: str = "127.0
           port: int = 8765, ros1: bool = False, threshold: float = 0.9,
           stop_delay: float | None = None, wait: bool = True,
           server: FoxgloveServer | None = None,
-          on_ready: Callable[[FoxgloveServer], None] | None = None) -> RunResult:
+          on_ready: Callable[[FoxgloveServer], None] | None = None,
+          safety: str | None = None) -> RunResult:
     """Simulate ``scenario`` live on a foxglove-sdk server (a new one on ``host:port``
-    unless ``server`` is given); with ``wait``, start once a client subscribed. Returns the
+    unless ``server`` is given); with ``wait``, start once a client subscribed; ``safety``
+    ``"shield:DIR"`` the shield generated in DIR in place of the hand-written SIF and
+    interceptor (:mod:`fretc.sim.shielded`: a shielded run watched live). Returns the
     :class:`~fretc.sim.simulation.RunResult`.
 
-    Raises KeyError for an unknown scenario, RuntimeError without foxglove-sdk.
+    Raises KeyError for an unknown scenario, RuntimeError without foxglove-sdk, ValueError
+    for a ``safety`` that names no shield folder (before the server starts).
     """
+    from fretc.sim.run import shield_of
+
+    shield = shield_of(safety)
     own = server is None
     if server is None:  # started once every channel exists: a client sees them all at once
         server = FoxgloveServer(host=host, port=port, name=f"fretc sim {scenario}",
@@ -99,7 +106,8 @@ def serve(scenario: str, *, seed: int = 1, rate: float = 1.0, host: str = "127.0
             on_ready(server)
         if wait:
             server.wait_subscribed(timeout=1e9)
-        sim = Simulation(get_scenario(scenario, stop_delay), seed=seed, threshold=threshold)
+        sim = Simulation(get_scenario(scenario, stop_delay), seed=seed, threshold=threshold,
+                         shield=shield)
         return sim.run(rec)
     finally:
         if own:

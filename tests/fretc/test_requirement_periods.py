@@ -1,7 +1,7 @@
 """Durations in time units count ticks of the bindings' period in ``fretc check``, ``fretc
-shield`` and ``fretc testgen``, as in ``fretc audit``, never as ticks (issue 83).
+shield`` and ``fretc testgen``, as in ``fretc audit``, never as ticks.
 
-Issue 83's units case: ``safe_ros.fret`` without its ``@tick_period``, shielded with ``-b
+The units case: ``safe_ros.fret`` without its ``@tick_period``, shielded with ``-b
 requirements/safe_ros.bindings.toml`` (100 ms): ``--explain`` read R2's "within 1 second" as
 1 tick and R6's "within 500 milliseconds" as 500 ticks (50 s of blind driving), exit 0, no
 warning. Now 10 and 5 ticks; without any period an input error naming it (exit 2); a binding

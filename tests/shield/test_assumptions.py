@@ -1,4 +1,4 @@
-"""The plant in the proof (issue 83): assumptions of the environment (``fretc shield
+"""The plant in the proof: assumptions of the environment (``fretc shield
 --assume``) as the shield's game's assumptions.
 
 A requirement over inputs only (``d > 0``) is monitored without them; with assumptions that

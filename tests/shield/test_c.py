@@ -198,7 +198,7 @@ def test_a_nan_no_enforced_requirement_compares_passes_in_c_as_in_python(tmp_pat
     """``d`` is read only by R2, over inputs only (monitored): a NaN there is decided on, in
     the Python form and now in C (it returned -1, no decision); a NaN in ``v``, which R1
     compares, is a proposal the shield cannot read: replaced in both (by the fallback's
-    value, v = 0, which R1 keeps), never passed on, never an exception (issue 84, V1)."""
+    value, v = 0, which R1 keeps), never passed on, never an exception."""
     from fretc.shield.build import build_shield as build_one
     from fretc.shield.emit_python import load_shield, render_python
 

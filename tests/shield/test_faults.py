@@ -1,4 +1,4 @@
-"""A shield's step is all or nothing, and no value it cannot read stops it (issue 84, V1).
+"""A shield's step is all or nothing, and no value it cannot read stops it.
 
 Random requirement sets over the inputs ``a``, ``b`` (booleans), ``d`` (a number) and ``m``
 (a mode) and the outputs ``x``, ``y`` (booleans) and ``v`` (a number), random runs, and at
@@ -174,7 +174,7 @@ def test_a_step_is_all_or_nothing_and_no_value_stops_it(text, run):
 
 
 def test_the_issue_example_nan_at_f1s_deadline_moves_no_machine(tmp_path):
-    """Issue 84's F1/F2: ``a`` at tick 0, ``o`` proposed false throughout, ``x = NaN`` at F1's
+    """F1/F2: ``a`` at tick 0, ``o`` proposed false throughout, ``x = NaN`` at F1's
     deadline. The step raised after F1's machine had moved, and F1 was violated on the next
     ticks; now the state stays, the fallback's ``o`` is true, and F1 is enforced after."""
     compiled = compile_text("F1: upon a ctrl shall within 2 ticks satisfy o\n"

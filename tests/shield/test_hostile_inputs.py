@@ -1,4 +1,4 @@
-"""Issue 84's shield findings on inputs, each from its smallest input: a free-form requirement
+"""The shield's findings on hostile inputs, each from its smallest input: a free-form requirement
 (I1: an internal error), generated forms that did not load and exit 0 (I4: a constant
 ``1e309``, outputs named after ``<math.h>``'s macros, a group of one ``Bool`` output),
 ``--emit ros2`` with a message type that does not exist and its partial output (D2, D3),

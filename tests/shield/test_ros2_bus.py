@@ -1,4 +1,4 @@
-"""The docs' ROS 2 node on time on a real bus (issue 83): the node the guide's command
+"""The docs' ROS 2 node on time on a real bus: the node the guide's command
 generates (``fretc shield`` of the shipped Safety System, ``--emit ros2``) between a rclpy
 controller proposing 0.3 m/s at 10 Hz and a rclpy LiDAR (an obstacle at 0.5 m from 3 s to
 6 s, silent from 8 s), judged by an independent rclpy node on receipt

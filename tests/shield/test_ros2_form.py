@@ -67,7 +67,7 @@ def test_the_node_meets_each_deadline_early_by_its_period_phase_and_latency(tmp_
     plus the node's latency: the package's shield meets each deadline that many ticks
     early without a flag (100 ms ticks and the 20 ms budget: 2 ticks; a budget of 250 ms
     in [shield] latency_budget: 4), the node carries its margin and budget, and --prove
-    states the timing and proves the node's shield too (issue 83)."""
+    states the timing and proves the node's shield too."""
     import fractions
 
     from fretc.shield.emit_ros2 import node_margin

@@ -1,4 +1,4 @@
-"""The generated ROS 2 node survives any message (issue 84, V1: the controller could kill the
+"""The generated ROS 2 node survives any message (the controller could kill the
 Safety System that guards it).
 
 The docs' Safe-ROS node (``--emit ros2``), built and run in a process of its own with ROS 2

@@ -157,8 +157,8 @@ def test_a_fault_happens_in_its_share_of_runs():
 
 
 def test_estimate_runs_with_the_shield_of_safety(files, tmp_path, monkeypatch):
-    """``fretc estimate --safety shield:DIR`` (issue 83: the contact probability with the
-    generated Safety System, beside the hand-written SIF): every run is simulated with the
+    """``fretc estimate --safety shield:DIR`` (the contact probability with the generated
+    Safety System, beside the hand-written SIF): every run is simulated with the
     shield in DIR in place of the SIF; a folder without a shield is a usage error."""
     from fretc.shield.build import build_shield
     from fretc.shield.emit import write_forms

@@ -115,7 +115,7 @@ def shipped(tmp_path_factory):
                                       "lidar_dropout"])
 def test_the_shipped_safety_system_keeps_the_robot_safe_and_finishes_what_the_sif_does(
         tmp_path, shipped, scenario):
-    """Issue 83: the generated Safety System of the shipped requirements, in place of the
+    """The generated Safety System of the shipped requirements, in place of the
     hand-written SIF and interceptor (which no longer run beside it): no contact on any
     scenario (the shield of R2..R6 alone drives into the drum of ``unmapped_obstacles`` and
     ``sif_disabled``), every mission the hand-written SIF completes completed, and the audit
@@ -143,3 +143,30 @@ def test_a_folder_without_a_shield_is_refused(tmp_path):
         record("nominal", output=None, safety=f"shield:{tmp_path}")
     with pytest.raises(ValueError, match="--safety is 'sif'"):
         record("nominal", output=None, safety="other")
+
+
+def test_a_shielded_run_is_served_live(shipped):
+    """``python -m fretc.sim serve --safety shield:DIR``: the run served live
+    (here to a stand-in of the Foxglove server that keeps what it is sent) is the shielded
+    run: the shield's ticks, no contact on ``sif_disabled``, and the shield's own
+    ``/cmd_vel_filtered`` and ``/gwendolen_control`` published; a folder without a shield
+    is refused before anything is served."""
+    from fretc.sim.serve import serve
+
+    class Server:
+        def __init__(self):
+            self.sent: dict[str, int] = {}
+
+        def channel(self, topic, *_args):
+            self.sent[topic] = 0
+
+        def log(self, topic, _data, _t):
+            self.sent[topic] += 1
+
+    server = Server()
+    res = serve("sif_disabled", rate=0.0, server=server, wait=False,
+                safety=f"shield:{shipped}")
+    assert res.shield_ticks > 0 and res.contact is None, res.outcome
+    assert server.sent["/gwendolen_control"] == res.shield_ticks
+    with pytest.raises(ValueError, match="one \\*_shield.py"):
+        serve("nominal", rate=0.0, server=Server(), wait=False, safety=f"shield:{REPO}")
