@@ -160,8 +160,8 @@ def plan(compiled: Sequence[Any], inputs: Sequence[str], outputs: Sequence[str],
         if undeclared:
             fret = {v.name: v for v in getattr(c.entry, "variables", ())}
             kinds = [f"{v} is {'an' if fret[v].kind[0] in 'IO' else 'a'} {fret[v].kind} "
-                     "variable in FRET's export" for v in undeclared
-                     if v in fret and fret[v].kind]
+                     "variable" + (f" of {fret[v].component}" if fret[v].component else "")
+                     + " in FRET's export" for v in undeclared if v in fret and fret[v].kind]
             raise ShieldError(f"{_where(c)}: {c.id} reads {', '.join(undeclared)}, declared "
                               "neither input nor output (--inputs/--outputs, or @inputs/"
                               "@outputs in the file): the shield must know who sets each"

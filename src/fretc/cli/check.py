@@ -28,7 +28,8 @@ import click
 from fretc.check.budget import MUS_BUDGET
 
 from fretc.cli.options import (TEXT_ATTRIBUTE_OPTION, FiniteRange, budget_options, io_options,
-                               names_of, requirement_set, set_bindings_option, shown)
+                               names_of, requirement_set, selection_options,
+                               set_bindings_option, shown)
 
 if TYPE_CHECKING:
     from fretc.check.findings import CheckResult
@@ -133,6 +134,7 @@ def _lasso(prefix, cycle) -> str:
 @io_options("Environment variables (realizability); default: @inputs of the files.",
             "Component variables (realizability); default: @outputs of the files.")
 @set_bindings_option("A binding file; fretc check reads its tick period only.")
+@selection_options
 @click.option("--json", "as_json", is_flag=True, help="Print the result as JSON.")
 @click.option("--witness-dir", type=click.Path(file_okay=False), default=None,
               help="Write a witness CSV per finding (replay with fretc audit).")
@@ -158,7 +160,8 @@ def _lasso(prefix, cycle) -> str:
               help="Also write the JSON result to FILE (for fretc report --check).")
 @TEXT_ATTRIBUTE_OPTION
 def check_cmd(files: tuple[str, ...], inputs: str | None, outputs: str | None,
-              bindings_file: str | None, as_json: bool, witness_dir: str | None, budget: int,
+              bindings_file: str | None, component: str | None, only: str | None,
+              exclude: str | None, as_json: bool, witness_dir: str | None, budget: int,
               memory_budget: int, query_cpu: float, mus_budget: int, timeout: float | None,
               engine: str, no_redundancy: bool, no_progress: bool, output: str | None) -> None:
     """Check requirement FILES for conflicts, vacuity, redundancy and (with inputs/outputs)
@@ -171,7 +174,8 @@ def check_cmd(files: tuple[str, ...], inputs: str | None, outputs: str | None,
     from fretc.check.budget import Budget, RunStopped
     from fretc.check.realizability import RealizabilityError
 
-    rs = requirement_set(files, bindings_file)
+    rs = requirement_set(files, bindings_file, component=component, only=only,
+                         exclude=exclude)
     ins, outs = names_of(inputs), names_of(outputs)
     ins = rs.inputs if ins is None else ins
     outs = rs.outputs if outs is None else outs

@@ -31,7 +31,7 @@ __all__ = ["TEXT_ATTRIBUTE_OPTION", "text_attribute", "BRIDGE_GAPS_OPTION", "bri
            "audit_input_options", "live_input_options", "audit_config", "ray_options",
            "run_audits", "META", "FleetError", "shown", "FiniteRange", "statistics_options",
            "names_of", "io_options", "set_bindings_option", "budget_options", "RequirementSet",
-           "requirement_set", "with_safety"]
+           "requirement_set", "with_safety", "selection_options"]
 
 
 class FiniteRange(click.FloatRange):
@@ -427,32 +427,132 @@ def budget_options(per: str) -> Callable[[F], F]:
 class RequirementSet:
     """Requirement files as ``fretc check``, ``fretc shield`` and ``fretc testgen`` read them
     (:func:`requirement_set`): ``as_written`` the entries as read, ``entries`` with a FRET
-    export's literal constants and each one's tick period, ``notes`` what a FRET export
-    declares and no requirement uses, ``bindings`` the ``-b`` file read (None without),
-    ``inputs``/``outputs`` the files' ``@inputs``/``@outputs`` (None when they declare
-    none)."""
+    export's literal constants and each one's tick period (those ``--only``/``--exclude``
+    select), ``notes`` what a FRET export declares and no requirement uses, ``bindings`` the
+    ``-b`` file read (None without), ``inputs``/``outputs`` the files' ``@inputs``/
+    ``@outputs``, or a FRET export's Input and Output variables of ``--component`` (None
+    when they declare none).
+
+    Raises:
+        InputError: ``--component`` names no component of a requirement, or (without it) a
+            FRET export declares a variable an Input of one component and an Output of
+            another, named with both (the set's inputs and outputs are then ambiguous)."""
 
     def __init__(self, as_written: list[Any], entries: list[Any], notes: list[str],
-                 bindings: Any):
+                 bindings: Any, component: str | None = None,
+                 every: list[Any] | None = None):
+        from fretc.common.errors import InputError
+
         self.as_written, self.entries, self.notes = as_written, entries, notes
         self.bindings = bindings
-        ins = [n for e in entries for n in e.inputs]
-        outs = [n for e in entries for n in e.outputs]
-        self.inputs = list(dict.fromkeys(ins)) if ins else None
-        self.outputs = list(dict.fromkeys(outs)) if outs else None
+        self.component = component
+        self._own = entries
+        if component is not None:  # (its declarations: every requirement's, selected or not)
+            self._own = [e for e in (every if every is not None else entries)
+                         if e.requirement is not None
+                         and e.requirement.component == component]
+            if not self._own:
+                comps = sorted({e.requirement.component for e in entries
+                                if e.requirement is not None})
+                raise InputError(f"--component {component}: no requirement of that component "
+                                 f"in the files (their components: {', '.join(comps)})")
+
+    @property
+    def inputs(self) -> list[str] | None:
+        """The declared inputs (class docstring); read only when ``--inputs`` is not given.
+
+        Raises:
+            InputError: as the class docstring says."""
+        if self.component is None:
+            _one_side(self.entries)
+        ins = [n for e in self._own for n in e.inputs]
+        return list(dict.fromkeys(ins)) if ins else None
+
+    @property
+    def outputs(self) -> list[str] | None:
+        """The declared outputs (class docstring); read only when ``--outputs`` is not
+        given.
+
+        Raises:
+            InputError: as the class docstring says."""
+        if self.component is None:
+            _one_side(self.entries)
+        outs = [n for e in self._own for n in e.outputs]
+        return list(dict.fromkeys(outs)) if outs else None
 
 
-def requirement_set(files: Sequence[str], bindings_file: str | None) -> RequirementSet:
+def _one_side(entries: list[Any]) -> None:
+    """Raise :class:`fretc.common.errors.InputError` when a FRET export declares a variable
+    an Input of one component and an Output of another (FRET's variables are per component:
+    the Safe-ROS stop request is the safety system's output and the interceptor's input)."""
+    from fretc.common.errors import InputError
+
+    sides: dict[str, dict[str, set[str]]] = {}
+    for e in entries:
+        for v in getattr(e, "variables", ()):
+            if v.kind in ("Input", "Output"):
+                sides.setdefault(v.name, {}).setdefault(v.kind, set()).add(v.component)
+    both = [f"{name} is an Output of {', '.join(sorted(k['Output']))} and an Input of "
+            f"{', '.join(sorted(k['Input']))}" for name, k in sides.items()
+            if "Input" in k and "Output" in k]
+    if both:
+        raise InputError("FRET's export declares its variables per component: "
+                         + "; ".join(both) + ". Give --component NAME to take one component's "
+                         "inputs and outputs (or --inputs and --outputs)")
+
+
+def selection_options(f: F) -> F:
+    """``--component NAME``, ``--only IDS`` and ``--exclude IDS`` of a requirement set
+    (:func:`requirement_set`)."""
+    for opt in reversed((
+        click.option("--component", default=None, metavar="NAME",
+                     help="Take the inputs and outputs a FRET export declares for this "
+                          "component (FRET's variables are per component)."),
+        click.option("--only", default=None, metavar="IDS",
+                     help="Only these requirements (ids, commas between them)."),
+        click.option("--exclude", default=None, metavar="IDS",
+                     help="Leave these requirements out (ids, commas between them).")),
+    ):
+        f = opt(f)
+    return f
+
+
+def _selected(entries: list[Any], only: str | None, exclude: str | None) -> list[Any]:
+    """``entries`` with ``--only``/``--exclude`` applied (module docstring).
+
+    Raises:
+        InputError: an id no requirement has, or nothing left."""
+    from fretc.common.errors import InputError
+
+    ids = [e.id for e in entries]
+    chosen = names_of(only) if only is not None else None
+    dropped = names_of(exclude) or []
+    unknown = [i for i in [*(chosen or []), *dropped] if i not in ids]
+    if unknown:
+        raise InputError(f"--only/--exclude name {', '.join(unknown)}: no requirement of that "
+                         f"id (the files': {', '.join(ids)})")
+    out = [e for e in entries if (chosen is None or e.id in chosen) and e.id not in dropped]
+    if not out:
+        raise InputError("--only/--exclude leave no requirement")
+    return out
+
+
+def requirement_set(files: Sequence[str], bindings_file: str | None, *,
+                    component: str | None = None, only: str | None = None,
+                    exclude: str | None = None) -> RequirementSet:
     """Read requirement ``files`` (any format :func:`fretc.fretish.files.load_requirements`
     reads) with the ``-b`` binding file: each requirement's tick period is its file's
     ``@tick_period``, else the bindings' (``-b``, else the binding files beside the
     requirements, :func:`fretc.audit.discovery.discover_bindings`, read only when a
     requirement needs a period), never a duration in time units read as ticks
-    (:mod:`fretc.signals.bindings.periods`).
+    (:mod:`fretc.signals.bindings.periods`); ``component``, ``only``, ``exclude`` the
+    options of :func:`selection_options` (:class:`RequirementSet`).
 
     Raises:
-        FretcError: a file or binding file that cannot be read, or no period known for a
-            duration in time units (exit 2 through the command group)."""
+        FretcError: a file or binding file that cannot be read, no period known for a
+            duration in time units, an unknown id or component, a FRET variable both a
+            component's input and another's output without ``component`` (exit 2 through
+            the command group)."""
     from pathlib import Path
 
     from fretc.common.errors import InputError
@@ -475,7 +575,10 @@ def requirement_set(files: Sequence[str], bindings_file: str | None) -> Requirem
     entries = with_periods(entries, bindings, found)
     if bindings_file is None:
         bindings = None  # (found beside: its period only)
-    return RequirementSet(as_written, entries, notes, bindings)
+    every = entries
+    if only is not None or exclude is not None:
+        entries = _selected(entries, only, exclude)
+    return RequirementSet(as_written, entries, notes, bindings, component, every)
 
 
 def _beside(files: Sequence[str]) -> tuple[Any, str]:

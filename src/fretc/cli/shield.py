@@ -24,7 +24,7 @@ from typing import Any
 import click
 
 from fretc.cli.options import (TEXT_ATTRIBUTE_OPTION, budget_options, io_options, names_of,
-                               requirement_set, set_bindings_option, shown)
+                               requirement_set, selection_options, set_bindings_option, shown)
 
 __all__ = ["shield_cmd", "FORMS"]
 
@@ -40,6 +40,7 @@ FORMS = ("python", "c", "ros2", "gwendolen")
 @set_bindings_option("A binding file: outputs bound to one topic are corrected together, "
                      "never to values no single message gives; the ros2 form reads and "
                      "writes the bound topics.")
+@selection_options
 @click.option("--prefer", default=None, metavar="LITERALS",
               help="Among corrections changing equally few output atoms, prefer these "
               "values, first first: e.g. 'stopped,!stop_requested'.")
@@ -71,7 +72,8 @@ FORMS = ("python", "c", "ros2", "gwendolen")
 @budget_options("game")
 @TEXT_ATTRIBUTE_OPTION
 def shield_cmd(files: tuple[str, ...], inputs: str | None, outputs: str | None,
-               bindings_file: str | None, prefer: str | None, assume: tuple[str, ...],
+               bindings_file: str | None, component: str | None, only: str | None,
+               exclude: str | None, prefer: str | None, assume: tuple[str, ...],
                fallback: str | None, forms: tuple[str, ...],
                out_dir: str | None, prove: bool, explain: bool, name: str | None,
                margin: int, budget: int, memory_budget: int, query_cpu: float) -> None:
@@ -85,7 +87,7 @@ def shield_cmd(files: tuple[str, ...], inputs: str | None, outputs: str | None,
 
     if forms and out_dir is None:
         raise click.UsageError("--emit needs -o DIR")
-    rs, compiled, assumed = _read(files, assume, bindings_file)
+    rs, compiled, assumed = _read(files, assume, bindings_file, (component, only, exclude))
     as_written = rs.as_written
     ins = names_of(inputs)
     outs = names_of(outputs)
@@ -136,14 +138,17 @@ def shield_cmd(files: tuple[str, ...], inputs: str | None, outputs: str | None,
     sys.exit(code)
 
 
-def _read(files: Sequence[str], assume: Sequence[str], bindings_file: str | None
+def _read(files: Sequence[str], assume: Sequence[str], bindings_file: str | None,
+          selection: tuple[str | None, str | None, str | None] = (None, None, None)
           ) -> tuple[Any, list[Any], list[Any]]:
-    """The requirement set, its requirements and the assumptions (``--assume``) compiled;
+    """The requirement set (``selection``: ``--component``, ``--only``, ``--exclude``), its
+    requirements and the assumptions (``--assume``) compiled;
     exits 2 naming what cannot be compiled, an id both a requirement's and an assumption's,
     or no requirement."""
     from fretc.compiler.build import compile_entries
 
-    rs = requirement_set(files, bindings_file)
+    component, only, exclude = selection
+    rs = requirement_set(files, bindings_file, component=component, only=only, exclude=exclude)
     compiled = compile_entries(rs.entries)
     assumed = compile_entries(requirement_set(assume, bindings_file).entries) if assume else []
     taken = {c.id for c in compiled}
