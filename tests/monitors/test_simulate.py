@@ -241,10 +241,12 @@ def test_a_long_csv_is_refused_after_its_first_rows(tmp_path):
     with open(tmp_path / "t.csv", "w") as f:
         f.write("time,speed\n")
         f.writelines(f"{i / 10:.1f},{i % 7}\n" for i in range(1_000_000))
-    code = ("import resource, sys\nfrom click.testing import CliRunner\nfrom fretc.cli import main\n"
+    from _peak import PEAK_KB
+
+    code = (PEAK_KB + "from click.testing import CliRunner\nfrom fretc.cli import main\n"
             f"res = CliRunner().invoke(main, ['simulate', {str(tmp_path / 'r.fret')!r}, "
             f"{str(tmp_path / 't.csv')!r}])\n"
-            "print(res.exit_code, resource.getrusage(resource.RUSAGE_SELF).ru_maxrss)\n"
+            "print(res.exit_code, _peak_kb())\n"
             "print(res.output)")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          timeout=600).stdout
