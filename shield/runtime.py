@@ -128,9 +128,19 @@ def read_value(var: str, kind: str, values: dict[str, Any], proposal: bool = Fal
     Raises:
         Unreadable: missing, of the wrong type, NaN, too large for a double, or (a
             ``proposal``) infinite."""
-    if var not in values:
-        raise Unreadable(f"{var} is missing")
-    value = values[var]
+    try:
+        value = values[var]
+    except KeyError:
+        raise Unreadable(f"{var} is missing") from None
+    t = type(value)
+    if t is float and kind == "n":  # (the common cases first: a step reads many values)
+        if value != value:
+            raise Unreadable(f"{var} is NaN")
+        if proposal and (value == math.inf or value == -math.inf):
+            raise Unreadable(f"{var} is {value}: no actuator takes an infinite value")
+        return value
+    if t is bool and kind == "b":
+        return value
     if kind == "b":
         if value is True or value is False:
             return value
@@ -151,6 +161,25 @@ def read_value(var: str, kind: str, values: dict[str, Any], proposal: bool = Fal
     if proposal and math.isinf(x):
         raise Unreadable(f"{var} is {x}: no actuator takes an infinite value")
     return x
+
+
+def _checked(kinds_of: dict[str, str], values: dict[str, Any], proposal: bool
+             ) -> dict[str, Any]:
+    """Every variable of ``kinds_of`` (variable -> kind) read from ``values`` as
+    :func:`read_value` reads it (a bool, or a finite float: taken as they are; anything
+    else through :func:`read_value`).
+
+    Raises:
+        Unreadable: as :func:`read_value`."""
+    out = {}
+    for v, k in kinds_of.items():
+        x = values.get(v, values)  # (``values`` itself: no variable's value)
+        t = type(x)
+        if (t is bool and k == "b") or (t is float and k == "n" and x - x == 0.0):
+            out[v] = x
+        else:
+            out[v] = read_value(v, k, values, proposal)
+    return out
 
 
 def term_value(t: tuple[Any, ...], values: dict[str, Any]) -> Any:
@@ -409,14 +438,15 @@ class _Machine:
         variable the machine reads but the output variables ``unknown`` (proposals that
         could not be read: their atoms are left to the correction and always changed)."""
         ins = tuple([f(inputs) for f in self.in_tests])
-        unk = frozenset(j for v in unknown for j in self.reading.get(v, ()))
-        if unk:
-            return self._unknown(ins, proposed, unk)
+        if unknown:
+            unk = frozenset(j for v in unknown for j in self.reading.get(v, ()))
+            if unk:
+                return self._unknown(ins, proposed, unk)
         prop = tuple([f(proposed) for f in self.out_tests])
         safe, nxt = self.move(ins, prop)
         if safe:
             return ((self._whole(proposed, prop) if self.integers else {}), (), (), nxt,
-                    self._broken(ins, prop))
+                    self._broken(ins, prop) if self.assumed else ())
         key = (self.state, ins, prop)
         got = self.corrections.get(key)
         if got is None:
@@ -543,6 +573,8 @@ class ShieldRuntime:
                 self.input_kinds.setdefault(v, k)
             for v, k in m.out_kinds.items():
                 self.output_kinds.setdefault(v, k)
+        #: the outputs no machine reads, passed through
+        self.passed = [v for v in self.outputs if v not in self.output_kinds]
 
     def reset(self) -> None:
         """Back to the initial state (before the first tick)."""
@@ -588,9 +620,49 @@ class ShieldRuntime:
         that cannot be read never raises; an input leaves the state as it was and gives the
         fallback (``Decision.fault`` says why), a proposal is replaced."""
         try:
-            ins = {v: read_value(v, k, inputs) for v, k in self.input_kinds.items()}
+            ins = _checked(self.input_kinds, inputs, False)
         except Unreadable as exc:
             return self.fault(f"input {exc}", proposed)
+        try:  # (the common case: every proposal readable)
+            props = _checked(self.output_kinds, proposed, True)
+            faults: list[str] = []
+            replaced: list[str] = []
+            frozen: frozenset[str] = frozenset()
+        except Unreadable:
+            props, faults, replaced, frozen = self._replaced(proposed)
+        # every machine decides before any moves: a step is all or nothing
+        moves = [m.decide(ins, props, frozen) for m in self.machines]
+        outputs = {v: proposed[v] for v in self.passed if v in proposed}
+        outputs.update(props)
+        reasons: list[str] = []
+        changed: list[str] = []
+        broken: list[str] = []
+        for m, (values, why, what, nxt, gone) in zip(self.machines, moves):
+            m.state = nxt
+            if values:
+                outputs.update(values)
+            if what:
+                reasons += why
+                changed += what
+            if gone:
+                broken += gone
+            if replaced:  # (a replaced proposal's atoms are changed, whatever their truth)
+                changed += [m.texts[j] for v in replaced for j in m.reading.get(v, ())
+                            if m.texts[j] not in what]
+        if broken:  # (the guarantee no longer holds: the fallback, as for unread inputs)
+            outs, moved = self._fallback_outputs(proposed)
+            return Decision(outs, True, tuple(reasons), moved, "; ".join(faults),
+                            tuple(broken))
+        if len(outputs) != len(self.outputs):  # (a missing output no machine reads)
+            outputs = {v: outputs[v] for v in self.outputs if v in outputs}
+        return Decision(outputs, bool(changed) or bool(faults), tuple(reasons),
+                        tuple(changed), "; ".join(faults))
+
+    def _replaced(self, proposed: dict[str, Any]
+                  ) -> tuple[dict[str, Any], list[str], list[str], frozenset[str]]:
+        """A proposal some of whose values cannot be read (module docstring): the values
+        read, each other replaced by the fallback's (or left to the correction: the
+        ``unknown`` variables); the faults and the replaced variables."""
         props: dict[str, Any] = {}
         unknown: set[str] = set()
         faults: list[str] = []
@@ -606,31 +678,7 @@ class ShieldRuntime:
                     props[v] = fallback[v]
                 else:
                     unknown.add(v)
-        frozen = frozenset(unknown)
-        # every machine decides before any moves: a step is all or nothing
-        moves = [m.decide(ins, props, frozen) for m in self.machines]
-        outputs = {v: proposed[v] for v in self.outputs
-                   if v not in self.output_kinds and v in proposed}
-        outputs.update(props)
-        reasons: list[str] = []
-        changed: list[str] = []
-        broken: list[str] = []
-        for m, (values, why, what, nxt, gone) in zip(self.machines, moves):
-            m.state = nxt
-            outputs.update(values)
-            reasons += why
-            changed += what
-            broken += gone
-            # (a replaced proposal's atoms are changed, whatever their new truth)
-            changed += [m.texts[j] for v in replaced for j in m.reading.get(v, ())
-                        if m.texts[j] not in what]
-        if broken:  # (the guarantee no longer holds: the fallback, as for unread inputs)
-            outs, moved = self._fallback_outputs(proposed)
-            return Decision(outs, True, tuple(reasons), moved, "; ".join(faults),
-                            tuple(broken))
-        return Decision({v: outputs[v] for v in self.outputs if v in outputs},
-                        bool(changed) or bool(faults), tuple(reasons), tuple(changed),
-                        "; ".join(faults))
+        return props, faults, replaced, frozenset(unknown)
 
     def fault(self, why: str, proposed: dict[str, Any]) -> Decision:
         """The decision of a tick whose inputs cannot be read (module docstring; ``why``
