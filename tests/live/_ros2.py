@@ -15,6 +15,12 @@ from _dds import fresh_domain
 ROOT = Path(__file__).resolve().parents[2]
 PEERS = str(Path(__file__).with_name("_ros2_peers.py"))
 
+#: R3 and R4 of the Safe-ROS set, over the topics the talker peer publishes
+REQ34 = """@tick_period 100 ms
+R3: whenever stop_requested cmd_vel_interceptor shall immediately satisfy forwarded_zero
+R4: the scout_mini shall always satisfy linear_speed <= 0.5 & angular_speed <= 0.5
+"""
+
 _started: list[subprocess.Popen] = []
 
 

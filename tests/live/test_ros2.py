@@ -29,7 +29,7 @@ from pathlib import Path
 
 import pytest
 
-from _ros2 import PEERS, ROOT, fretc_run, kill_peers, peer, ros2_domain, started
+from _ros2 import PEERS, REQ34, ROOT, fretc_run, kill_peers, peer, ros2_domain, started
 
 pytest.importorskip("rclpy", reason="ROS 2 Jazzy's rclpy is not installed here (the "
                     "ros-jazzy-* wheels of the test extra are for CPython 3.11 on Linux "
@@ -39,10 +39,6 @@ pytest.importorskip("cyclonedds", reason="cyclonedds is not installed: pip insta
 
 pytestmark = [pytest.mark.watch, pytest.mark.xdist_group("ros2")]
 
-REQ34 = """@tick_period 100 ms
-R3: whenever stop_requested cmd_vel_interceptor shall immediately satisfy forwarded_zero
-R4: the scout_mini shall always satisfy linear_speed <= 0.5 & angular_speed <= 0.5
-"""
 
 _domain, _peer, _fretc = ros2_domain, peer, fretc_run
 

@@ -12,7 +12,7 @@ import time
 
 import pytest
 
-from _ros2 import ROOT, fretc_run, fretc_start, kill_peers, peer, ros2_domain
+from _ros2 import REQ34, ROOT, fretc_run, fretc_start, kill_peers, peer, ros2_domain
 
 pytest.importorskip("rclpy", reason="ROS 2 Jazzy's rclpy is not installed here (the "
                     "ros-jazzy-* wheels of the test extra are for CPython 3.11 on Linux "
@@ -22,10 +22,6 @@ pytest.importorskip("cyclonedds", reason="cyclonedds is not installed: pip insta
 
 pytestmark = [pytest.mark.watch, pytest.mark.xdist_group("ros2")]
 
-REQ34 = """@tick_period 100 ms
-R3: whenever stop_requested cmd_vel_interceptor shall immediately satisfy forwarded_zero
-R4: the scout_mini shall always satisfy linear_speed <= 0.5 & angular_speed <= 0.5
-"""
 R6 = """@tick_period 100 ms
 R6: whenever scan_stale safety_system shall within 500 milliseconds satisfy stop_requested
 """
