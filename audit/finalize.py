@@ -40,7 +40,19 @@ if TYPE_CHECKING:
     from fretc.signals.clock import Sampling
     from fretc.audit.verdict import LogAudit, Verdict
 
-__all__ = ["finalize", "between_ticks", "prepare", "unknown_of"]
+__all__ = ["finalize", "between_ticks", "prepare", "unknown_of", "NAN_FALSE_NOTE",
+           "vacuous_note"]
+
+#: The note of every verdict judged under a binding file's ``[tick] nan = "false"``.
+NAN_FALSE_NOTE = ("NaN policy of the binding file ([tick] nan = \"false\"): a comparison "
+                  "with NaN is false")
+
+
+def vacuous_note(intervals: int) -> str:
+    """The note of a vacuous verdict whose interval semantics found ``intervals`` scope
+    intervals (none: the scope was never entered; else no trigger fired)."""
+    return "vacuous: " + ("the scope was never entered" if intervals == 0
+                          else "the trigger never fired")
 
 
 def between_ticks(v: Verdict, s: Sampling, r: RequirementPlan, bindings: Bindings | None) -> None:
@@ -154,8 +166,7 @@ def _verdict(plan: AuditPlan, r: RequirementPlan, res: ClockPass, bindings: Bind
     if holds:
         v.verdict = "vacuous" if (ev is not None and ev.vacuous) else "satisfied"
         if v.verdict == "vacuous" and ev is not None:
-            v.notes.append("vacuous: " + ("the scope was never entered" if ev.intervals == 0
-                                          else "the trigger never fired"))
+            v.notes.append(vacuous_note(ev.intervals))
         return
     v.verdict = "violated"
     _violation_evidence(plan, r, res, bindings, v, ev, status, st_tick)
@@ -221,8 +232,7 @@ def prepare(r: RequirementPlan, res: ClockPass, bindings: Bindings | None, v: Ve
     nan_unknown = _nan_unknown(bindings)
     n = len(res.times)
     if not nan_unknown:
-        v.notes.append("NaN policy of the binding file ([tick] nan = \"false\"): a "
-                       "comparison with NaN is false")
+        v.notes.append(NAN_FALSE_NOTE)
     elif n:
         _nan_problem(r, res, la)
     unknown = unknown_of(r, res, nan_unknown)

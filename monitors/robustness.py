@@ -36,6 +36,7 @@ away (``+inf`` when they are boolean).
 from __future__ import annotations
 
 import math
+from typing import Any
 from collections.abc import Iterator, Mapping
 from dataclasses import dataclass
 
@@ -47,7 +48,8 @@ from fretc.monitors.vectorized import VectorizeError, node_series
 
 _FUTURE = ("X", "F", "G", "U", "V", "LAST", "future")
 
-__all__ = ["Robustness", "TINY", "robustness", "robustness_of_traces", "robustness_series"]
+__all__ = ["Robustness", "TINY", "robustness", "robustness_of_traces", "robustness_columns",
+           "robustness_series"]
 
 #: The smallest positive double: ``-TINY`` is the robustness of a comparison false at
 #: distance 0 (the module docstring's sign convention).
@@ -159,6 +161,25 @@ def robustness_of_traces(pt: Node, columns: Columns, firsts: np.ndarray,
 
     Raises:
         VectorizeError: as :func:`robustness`."""
+    got = robustness_columns(pt, columns, firsts, lengths)
+    if got is None:
+        return None
+    margin, values, ticks = got
+    return [Robustness(value, tick, margin[a:a + m].copy())
+            for a, m, value, tick in zip(firsts.tolist(), lengths.tolist(), values.tolist(),
+                                         ticks.tolist())]
+
+
+def robustness_columns(pt: Node, columns: Columns, firsts: np.ndarray, lengths: np.ndarray
+                       ) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+    """:func:`robustness_of_traces` as columns: ``(margin, values, ticks)``, the margin of
+    every tick of the traces laid end to end (float array of ``lengths.sum()``), and per
+    trace its value and the first 0-based tick of the trace at that value (``0`` when none
+    equals it: a NaN value), as :class:`Robustness` has them for one trace. None when
+    :func:`robustness_of_traces` gives None.
+
+    Raises:
+        VectorizeError: as :func:`robustness`."""
     n = int(lengths.sum())
     top = pt.op == "H" and pt.hi is None
     body = pt.args[0] if top else pt
@@ -166,11 +187,12 @@ def robustness_of_traces(pt: Node, columns: Columns, firsts: np.ndarray,
         return None
     margin = _Traces(columns, n, body, np.repeat(firsts, lengths)).rho(body)
     values = (np.minimum.reduceat(margin, firsts) if top else margin[firsts + lengths - 1])
-    out = []
-    for a, m, value in zip(firsts.tolist(), lengths.tolist(), values.tolist()):
-        own = margin[a:a + m].copy()
-        out.append(Robustness(value, int(np.argmax(own == value)), own))
-    return out
+    trace = np.repeat(np.arange(len(firsts), dtype=np.int64), lengths)
+    far = np.iinfo(np.int64).max
+    at = np.where(margin == values[trace], np.arange(n, dtype=np.int64) - firsts[trace], far)
+    ticks = np.minimum.reduceat(at, firsts)
+    ticks[ticks == far] = 0  # (np.argmax of no hit, as robustness() has it)
+    return margin, values, ticks
 
 
 def robustness_series(node: Node, columns: Columns, n: int) -> np.ndarray:
@@ -367,15 +389,25 @@ class _Traces(_Rho):
             return np.where(self.first, _INF, -_INF)
         return super()._compute(node)
 
+    def _scan(self, x: np.ndarray, combine: Any) -> np.ndarray:
+        """The inclusive scan of ``x`` by ``combine(earlier, later)`` (associative) within
+        each trace, by doubling (Hillis and Steele): ``log2`` of the longest trace numpy
+        steps over all ticks, rather than a step per trace or per tick."""
+        n, idx = self.n, np.arange(self.n, dtype=np.int64)
+        longest = int((idx - self.seg).max()) + 1 if n else 0
+        out, d = x, 1
+        while d < longest:
+            ok = idx[d:] - d >= self.seg[d:]  # (tick i - d in tick i's trace)
+            new = out.copy() if out is x else out
+            new[d:] = np.where(ok, combine(out[:-d], out[d:]), out[d:])
+            out, d = new, d * 2
+        return out.copy() if out is x else out
+
     def _once(self, node: Node) -> np.ndarray:
         x, is_once = self.rho(node.args[0]), node.op == "O"
         pick = np.maximum if is_once else np.minimum
-        if node.hi is None:
-            out = np.empty(self.n)
-            edges = np.flatnonzero(self.first).tolist() + [self.n]
-            for a, b in zip(edges, edges[1:]):
-                out[a:b] = pick.accumulate(x[a:b])
-            return out
+        if node.hi is None:  # (max and min: exact whatever the order of the steps)
+            return self._scan(x, pick)
         lo, hi, m = node.lo or 0, node.hi, self.n
         out = np.full(m, -_INF if is_once else _INF)
         idx = np.arange(m, dtype=np.int64)
@@ -385,8 +417,42 @@ class _Traces(_Rho):
         return out
 
     def _since(self, node: Node) -> np.ndarray:
+        """``a S b`` and ``a T b`` (:meth:`_Rho._since`'s recurrences) restarting at each
+        trace: each tick's step ``s -> max(b, min(a, s))`` (``S``) is the clamp of ``s`` to
+        ``[b, max(a, b)]`` (``T``'s ``min(b, max(a, s))`` to ``[min(a, b), b]``), clamps
+        compose into clamps, so the recurrence is a scan of clamps (:meth:`_scan`) read at
+        the start value (``-inf``: the low end; ``+inf``: the high end). The values are
+        the inputs' (no arithmetic): those of the tick by tick loop, which runs instead
+        where an input is NaN or a negative zero (Python's ``max`` and ``min`` order
+        them as it meets them)."""
         op = node.op
-        a, b = self.rho(node.args[0]).tolist(), self.rho(node.args[1]).tolist()
+        a, b = self.rho(node.args[0]), self.rho(node.args[1])
+        if not (np.isnan(a).any() or np.isnan(b).any()
+                or ((a == 0) & np.signbit(a)).any() or ((b == 0) & np.signbit(b)).any()):
+            lo, hi = (b, np.maximum(a, b)) if op == "S" else (np.minimum(a, b), b)
+            both = np.stack((lo, hi))
+
+            def compose(earlier: np.ndarray, later: np.ndarray) -> np.ndarray:
+                return np.minimum(np.maximum(earlier, later[0]), later[1])
+
+            got = self._scan_pairs(both, compose)
+            return got[0] if op == "S" else got[1]
+        return self._since_loop(op, a.tolist(), b.tolist())
+
+    def _scan_pairs(self, x: np.ndarray, combine: Any) -> np.ndarray:
+        """:meth:`_scan` of pairs (``x`` of shape ``(2, n)``, ``combine`` of such arrays)."""
+        n, idx = self.n, np.arange(self.n, dtype=np.int64)
+        longest = int((idx - self.seg).max()) + 1 if n else 0
+        out, d = x, 1
+        while d < longest:
+            ok = idx[d:] - d >= self.seg[d:]
+            new = out.copy()
+            new[:, d:] = np.where(ok, combine(out[:, :-d], out[:, d:]), out[:, d:])
+            out, d = new, d * 2
+        return out
+
+    def _since_loop(self, op: str, a: list, b: list) -> np.ndarray:
+        """:meth:`_since` tick by tick (Python floats)."""
         start = -_INF if op == "S" else _INF
         out, s = [], start
         for ai, bi, first in zip(a, b, self.first.tolist()):

@@ -13,6 +13,7 @@ rather than a loop over its ticks.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from operator import attrgetter
 from typing import Any
 
@@ -92,7 +93,7 @@ class EntityColumns:
                     [t.values[entities][1] for t in ticks], n_ticks, n_entities)
 
     @classmethod
-    def of_runs(cls, names: list[str], absent: tuple, firsts: list[int], counts: list[int],
+    def of_runs(cls, names: list[str], absent: tuple, firsts: list[int], counts: Sequence[int],
                 rows: list, n_ticks: int, n_entities: int) -> EntityColumns:
         """The columns of ``n_ticks`` ticks given as runs (run ``r``: ``counts[r]`` ticks from
         tick ``firsts[r]``, each holding the rows ``rows[r]``; :mod:`fretc.audit.entities.runs`),
@@ -106,7 +107,7 @@ class EntityColumns:
         return out
 
     def _build(self, names: list[str], absent: dict[str, tuple[np.ndarray, np.ndarray]],
-               firsts: list[int], counts: list[int], rows: list, n_ticks: int,
+               firsts: list[int], counts: Sequence[int], rows: list, n_ticks: int,
                n_entities: int) -> None:
         """The columns from the absent values (per variable, at each tick) and the rows of
         runs (:meth:`of_runs`): rows given as a list of ``(entity, values)``, or as a
@@ -121,17 +122,24 @@ class EntityColumns:
             parts.append(_held_rows(names, [rows[j] for j in at.tolist()],
                                     np.asarray(firsts, np.int64)[at],
                                     np.asarray(counts, np.int64)[at]))
-        entity = np.concatenate([p[0] for p in parts])
-        self.order = np.argsort(entity, kind="stable")
-        self.entity = entity[self.order]
-        self.tick = np.concatenate([p[1] for p in parts])[self.order]
+        parts = [p for p in parts if len(p[0])] or parts[:1]
+        small = max(n_entities, n_ticks) < 2 ** 31  # (int32 indexes: half the memory)
+        entity = _joined([p[0] for p in parts])
+        if small:
+            entity = entity.astype(np.int32)
+        order = np.argsort(entity, kind="stable")
+        self.entity = entity[order]
+        del entity
+        tick = _joined([p[1] for p in parts])
+        self.tick = (tick.astype(np.int32) if small else tick)[order]
+        del tick
         self.starts = np.searchsorted(self.entity, np.arange(n_entities + 1))
         self.rows: dict[str, tuple[np.ndarray, np.ndarray]] = {
-            n: (np.concatenate([p[2][n][0] for p in parts])[self.order],
-                np.concatenate([p[2][n][1] for p in parts])[self.order]) for n in names}
+            n: (_joined([p[2][n][0] for p in parts])[order],
+                _joined([p[2][n][1] for p in parts])[order]) for n in names}
 
     @staticmethod
-    def _listed(names: list[str], firsts: list[int], counts: list[int], rows: list,
+    def _listed(names: list[str], firsts: list[int], counts: Sequence[int], rows: list,
                 n_ticks: int, any_list: bool) -> tuple:
         """The rows given as lists, as (entity, tick, variable -> (values, bools))."""
         flat: list[tuple] = []
@@ -172,6 +180,11 @@ class EntityColumns:
         return {n: _merged((self.absent[n][0][idx], self.absent[n][1][idx]), slots,
                            (self.rows[n][0][ok][inside], self.rows[n][1][ok][inside]))
                 for n in self.names}
+
+
+def _joined(arrays: list[np.ndarray]) -> np.ndarray:
+    """``arrays`` end to end (one array: itself, not a copy)."""
+    return arrays[0] if len(arrays) == 1 else np.concatenate(arrays)
 
 
 def _held_rows(names: list[str], held: list[HeldRows], firsts: np.ndarray,

@@ -7,6 +7,7 @@ docs/bindings.md, "One verdict per entity"."""
 
 from __future__ import annotations
 
+from array import array
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -81,8 +82,9 @@ class EntityTable:
 
     index: dict[Any, int] = field(default_factory=dict)
     keys: list[Any] = field(default_factory=list)
-    first: list[int] = field(default_factory=list)
-    last: list[int] = field(default_factory=list)
+    #: (int64 arrays of the standard library: 8 bytes an entity, not a Python int each)
+    first: array = field(default_factory=lambda: array("q"))
+    last: array = field(default_factory=lambda: array("q"))
     errors: dict[int, SignalError] = field(default_factory=dict)
     #: the messages of the entities read in their own messages, in the order met: (entity,
     #: message time (the clock's time base), its values (one-value keys; () for an array

@@ -19,26 +19,26 @@ from __future__ import annotations
 
 import dataclasses
 import re
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 
-from fretc.audit.entities.batch import batch_verdicts, batchable, nan_traces
+from fretc.audit.entities.batch import batchable, judge_at_once
 from fretc.audit.entities.columns import EntityColumns, column as _column
 from fretc.audit.entities.kinds import entity_kind
 from fretc.audit.entities.read import ENTITIES, EntityClock, read_entities
+from fretc.audit.entities.runs import TickRuns
 from fretc.audit.entities.summary import summary_note, summary_verdict
+from fretc.audit.entities.verdicts import EntityVerdict
 from fretc.audit.finalize import finalize
 from fretc.audit.gaps import inner_gaps, merged_gaps, split_bridged
 from fretc.audit.log_problems import collect_problems, problem_json
 from fretc.audit.columns import ClockPass
 from fretc.audit.passes import cut_at_damage, lost_in_words, mark_gaps
-from fretc.audit.verdict import NO_EVIDENCE, LogAudit, Ltl3, Verdict
+from fretc.audit.verdict import LogAudit, Verdict
 from fretc.common.problems import FretcInputError
 from fretc.common.streams import base_topic, log_topics
 from fretc.logs import open_log
-from fretc.monitors.robustness import robustness_of_traces
-from fretc.monitors.vectorized import VectorizeError
 from fretc.signals.bindings import Bindings
 from fretc.signals.bindings.expression import TF_TOPICS, EntityParam
 
@@ -55,13 +55,11 @@ DEFAULT_MAX_ENTITIES = 1_000_000
 #: The start of the error of every per-entity requirement when the log cannot be opened.
 NOT_AUDITED = "log not audited: "
 
-#: Whether the robustness of the entities the batch finds violated is computed at once
-#: (False: one entity at a time, the reference the tests compare it with)
+#: Whether the robustness of the entities the batch finds violated is passed to their
+#: judgement one at a time (False: computed again there, the reference the tests compare
+#: it with)
 BATCH_ROBUSTNESS = True
 
-#: The note of an entity judged with the others (:mod:`fretc.audit.entities.batch`).
-BATCH_NOTE = ("judged with the requirement's other entities at once (its pt formula over "
-              "their ticks): robustness and interval counts are given for violated entities")
 
 _DOLLAR = re.compile(r"\$([A-Za-z_][A-Za-z0-9_]*)")
 
@@ -275,6 +273,7 @@ class _Judge:
                  source: Any, gaps: list) -> None:
         self.ents, self.r, self.name, self.c, self.source, self.gaps = (
             ents, r, name, c, source, gaps)
+        c.table.index = {}  # (the keys' index served the read: let go before the columns)
         own = [b.name for b in c.own]
         self.rows: EntityColumns | None = None
         if c.lean:  # (its ticks are runs: no plain variable, an array key)
@@ -293,6 +292,9 @@ class _Judge:
                                            np.int64) for tp in topics}
             if not c.kind.stream:
                 self.rows = EntityColumns(ticks, own, ENTITIES, len(c.table.keys))
+        # (what the read kept that the columns now hold, and the keys' index, are let go
+        # before the judgement: 10^6 entities' runs, rows and index are hundreds of MB)
+        c.runs = TickRuns(c.period or 0)
         self.lives: tuple[np.ndarray, np.ndarray] | None = None  # first, last times
         #: entity -> the robustness of its trace computed with the others' (the batch), and
         #: its LTL3 verdict, tick and ticks
@@ -307,6 +309,8 @@ class _Judge:
         #: entities of an array key read at no tick of their life (each message that
         #: carried them superseded before a tick): their values were never read
         self.unread = self._unread()
+        #: the records of the entities judged at once (:mod:`fretc.audit.entities.verdicts`)
+        self.block: Any = None
         self.bindings = Bindings({**{b.name: b for b in c.variables},
                                   **{b.name: b for b in c.own}},
                                  ents.plan.bindings.tick, ents.plan.bindings.time_base,
@@ -318,15 +322,21 @@ class _Judge:
         if not table.keys:
             return ents.alone(r, "vacuous", notes=[f"no entity {self.name} ({key}) appeared in "
                                                    "the log: the requirement holds of none"])
-        fast = self._batch()
-        out = [fast.get(i) or self._one(i) for i in range(len(table.keys))]
+        fast = self._batch()  # (entity -> its record, -1: judged alone)
+        block = self.block
+        out: list[Verdict] = [  # (a record reads as a Verdict: audit/entities/verdicts.py)
+            self._one(i) if k < 0 else cast(Verdict, EntityVerdict(block, k))
+            for i, k in enumerate(fast.tolist())]
         if ents.keep is not None:  # (what the entities judged at once were judged on)
-            for i, v in fast.items():
+            for i in np.flatnonzero(fast >= 0).tolist():
                 i0, i1 = self._range(i)
-                ents.kept[v.requirement] = ents.keep(r, self._pass(i, i0, i1))
+                ents.kept[out[i].requirement] = ents.keep(r, self._pass(i, i0, i1))
         summary = summary_note(r.id, self.name, out)
+        if self.block is not None:  # (the records' notes end with it)
+            self.block.summary = summary
         for v in out:
-            v.notes.append(summary)
+            if type(v) is Verdict:
+                v.notes.append(summary)
         if table.cut:  # the entities left unjudged: a verdict of their own, never named r.id
             rest = ents.alone(r, "error", error=(
                 f"more than {ents.bound:,} entities {self.name} ({key}) in the log: only the "
@@ -335,21 +345,13 @@ class _Judge:
             out += rest
         return [summary_verdict(r, ents.path, out, summary)] + out
 
-    def _new(self, i: int, batch: Ltl3 | None = None, vacuous: bool = False,
-             ticks: tuple[int, int | None, int | None] = (0, None, None)) -> Verdict:
-        """Entity ``i``'s verdict: not yet judged, or (``batch``: its LTL3 verdict) judged at
-        once, satisfied or ``vacuous``, over ``ticks`` (count, first and last tick time, ns),
-        with no evidence (its evidence fields the shared empty ones, :data:`NO_EVIDENCE`)."""
+    def _new(self, i: int) -> Verdict:
+        """Entity ``i``'s verdict, not yet judged."""
         r, table, value = self.r, self.c.table, self.c.table.keys[i]
         seen = (f"entity {self.name} = {value!r} ({self.c.kind.key}): first seen at "
                 f"log time {table.first[i]}, last at {table.last[i]}")
         rid = f"{r.id}[{self.name}={value}]"
-        if batch is None:
-            return Verdict(self.ents.path, rid, r.text, r.source, notes=[*r.notes, seen])
-        return Verdict(self.ents.path, rid, r.text, r.source,
-                       verdict="vacuous" if vacuous else "satisfied", engine="vectorized",
-                       ticks_evaluated=ticks[0], first_tick_ns=ticks[1], last_tick_ns=ticks[2],
-                       notes=[*r.notes, seen, BATCH_NOTE], ltl3=batch, **NO_EVIDENCE)
+        return Verdict(self.ents.path, rid, r.text, r.source, notes=[*r.notes, seen])
 
     def _own_log_times(self, i: int, times: np.ndarray, log_times: dict) -> None:
         """The log time held at each tick of ``times`` on the key's topic, for entity ``i``
@@ -405,75 +407,14 @@ class _Judge:
         return (i0, np.minimum(np.searchsorted(self.times, last, side="left"),
                                n - 1).astype(np.int64))
 
-    def _batch(self) -> dict[int, Verdict]:
-        """The entities judged at once (:mod:`fretc.audit.entities.batch`): satisfied or
-        vacuous ones on a log without damage; the others are judged one at a time."""
-        src, c = self.source, self.c
+    def _batch(self) -> np.ndarray:
+        """The entities judged at once (:func:`fretc.audit.entities.batch.judge_at_once`):
+        satisfied or vacuous ones on a log without damage, as records of :attr:`block`;
+        entity -> its record (-1: judged one at a time)."""
         trig = batchable(self.ents.plan, self.r)
-        if trig is None or src.partial or src.lost or inner_gaps(src):
-            return {}
-        judged = [i for i in range(len(c.table.keys))
-                  if (i not in c.table.errors or c.kind.stream) and i not in self.unread]
-        n = len(self.times)
-        i0s, i1s = self._ranges(judged)
-        keep = i0s < n
-        judged = np.asarray(judged, np.int64)[keep].tolist()
-        if not judged:
-            return {}
-        i0s = i0s[keep]
-        lengths = i1s[keep] - i0s + 1
-        firsts = np.concatenate(([0], np.cumsum(lengths)[:-1])).astype(np.int64)
-        idx = np.arange(int(lengths.sum()), dtype=np.int64) - np.repeat(firsts - i0s, lengths)
-        columns = {k: col[idx] for k, col in self.plain.items()}
-        columns.update(self._own_columns(judged, i0s, firsts, lengths, idx))
-        got = batch_verdicts(self.r, trig, columns, firsts, lengths)
-        if got is None:
-            return {}
-        holds, vacuous, ltl3 = got
-        slow = nan_traces(columns, firsts, lengths)
-        self._violated_robustness(judged, holds, slow, columns, firsts, lengths)
-        holds = np.asarray(holds, np.bool_)
-        fast = np.ones(len(judged), np.bool_)
-        fast[list(slow)] = False
-        counts = lengths.tolist()
-        starts, vacuous_ = i0s.tolist(), np.asarray(vacuous).tolist()
-        for e in np.flatnonzero(fast & ~holds).tolist():  # (violated: judged alone, with
-            self.ltl3s[judged[e]] = (*ltl3[e], counts[e])  # the LTL3 verdict and ticks known)
-        out: dict[int, Verdict] = {}
-        times = self.times.tolist()  # (Python ints: an entity's fields read without numpy)
-        lasts = self.times[i0s + lengths - 1].tolist()
-        shared: dict[tuple, Ltl3] = {}  # (equal LTL3 verdicts as one object: immutable)
-        for e in np.flatnonzero(fast & holds).tolist():
-            i, (status, tick) = judged[e], ltl3[e]
-            key = (status, tick, times[starts[e] + tick] if tick is not None else None)
-            same = shared.get(key)
-            if same is None:
-                same = shared[key] = Ltl3(*key)
-            out[i] = self._new(i, same, vacuous_[e], (counts[e], times[starts[e]], lasts[e]))
-        return out
-
-    def _violated_robustness(self, judged: list[int], holds: Any, slow: set[int],
-                             columns: dict[str, np.ndarray], firsts: np.ndarray,
-                             lengths: np.ndarray) -> None:
-        """The robustness of the entities of ``judged`` the batch found violated, at once
-        (:func:`fretc.monitors.robustness.robustness_of_traces`), into :attr:`robs` for
-        their evidence one at a time (:meth:`_one`); none when it cannot be computed so."""
-        bad = [e for e, h in enumerate(np.asarray(holds).tolist())
-               if not h and e not in slow]
-        if not BATCH_ROBUSTNESS or not bad:
-            return
-        at = np.asarray(bad, np.int64)
-        counts = lengths[at]
-        starts = np.cumsum(counts) - counts
-        idx = np.repeat(firsts[at] - starts, counts) + np.arange(int(counts.sum()),
-                                                                dtype=np.int64)
-        try:
-            got = robustness_of_traces(self.r.formalization.pt,
-                                       {k: c[idx] for k, c in columns.items()}, starts, counts)
-        except (VectorizeError, KeyError):
-            return
-        for e, rob in zip(bad, got or ()):
-            self.robs[judged[e]] = rob
+        if trig is None:
+            return np.full(len(self.c.table.keys), -1, np.int64)
+        return judge_at_once(self, trig, BATCH_ROBUSTNESS)
 
     def _own_columns(self, judged: list[int], i0s: np.ndarray, firsts: np.ndarray,
                      lengths: np.ndarray, idx: np.ndarray) -> dict[str, np.ndarray]:

@@ -11,6 +11,7 @@ ticks as objects (for tests: the tick-by-tick clock's ticks, equal by test).
 
 from __future__ import annotations
 
+from array import array
 from itertools import chain, repeat
 from typing import Any
 
@@ -33,10 +34,11 @@ class TickRuns:
 
     def __init__(self, period: int) -> None:
         self.period = period
-        self.starts: list[int] = []
-        self.counts: list[int] = []
+        # (int64 arrays of the standard library: 8 bytes a run, not a Python int each)
+        self.starts = array("q")
+        self.counts = array("q")
         self.rows: list[Any] = []
-        self.log_times: dict[str, list[int]] = {}
+        self.log_times: dict[str, array] = {}
 
     def add(self, start: int, n: int, rows: Any, log_times: dict[str, int]) -> None:
         """One more run (its ticks after those recorded), holding the log times
@@ -50,19 +52,19 @@ class TickRuns:
         times ``log_times`` (topic -> ns) but for ``topic``, whose log time at each run is
         ``topic_log_times`` (as long as ``starts``)."""
         k, m = len(self.starts), len(starts)
-        self.starts += starts
-        self.counts += counts
+        self.starts.extend(starts)
+        self.counts.extend(counts)
         self.rows += rows
         cols = self.log_times
         also = () if topic is None else (topic,)
         for tp in dict.fromkeys([*log_times, *also, *cols]):
             col = cols.get(tp)
             if col is None:
-                col = cols[tp] = [-1] * k
+                col = cols[tp] = array("q", [-1]) * k
             if tp == topic:
-                col += topic_log_times  # type: ignore[arg-type]  # (given with topic)
+                col.extend(topic_log_times)  # type: ignore[arg-type]  # (given with topic)
             else:
-                col += [log_times.get(tp, -1)] * m
+                col.extend(array("q", [log_times.get(tp, -1)]) * m)
 
     def _run_of(self) -> np.ndarray:
         """The run of each tick (int64, one per tick)."""

@@ -236,17 +236,20 @@ def test_the_requirement_verdict_over_its_entities_is_their_definition(entities)
         _listed([x.requirement for x in out if x.verdict == "violated"], ", ") or "none")]
 
 
-def test_the_entities_judged_at_once_share_evidence_that_cannot_change(tmp_path, monkeypatch):
-    """The satisfied entities (judged at once) share their empty evidence containers
-    (``NO_EVIDENCE``): the audit's JSON and a pickle (as a fleet worker sends it) are those of
-    verdicts with containers of their own, and a change to a shared one raises instead of
-    changing every entity's verdict; a violated entity (judged alone) has its own."""
+def test_the_entities_judged_at_once_are_records_read_as_verdicts(tmp_path):
+    """The satisfied entities (judged at once) are records read as verdicts
+    (audit/entities/verdicts.py): the audit's JSON, and a pickle (as a fleet worker sends
+    it) read back, are those of the same verdicts as :class:`Verdict` objects; their
+    evidence containers cannot change (a change raises, never lost), a change of a field
+    makes the record a verdict of its own (the others unchanged); a violated entity (judged
+    alone) is a :class:`Verdict`."""
     import json
     import pickle
 
     import pytest
 
-    import fretc.audit.entities.log as entities
+    from fretc.audit.entities.verdicts import EntityVerdict
+    from fretc.audit.verdict import Verdict
 
     Track, TrackArray = _track_types()
     rows = [{1: 2.0, 2: 2.0}, {1: 2.0, 2: 0.2, 3: 2.0}, {3: 2.0, 4: 2.0}, {4: 2.0}]
@@ -258,26 +261,26 @@ def test_the_entities_judged_at_once_share_evidence_that_cannot_change(tmp_path,
                                      "T: in present mode the robot shall always satisfy dist > 0.5\n")
     (tmp_path / "t.bindings.toml").write_text(TRACK_BINDINGS)
     plan = load_plan(AuditConfig(requirements=(str(tmp_path / "t.fret"),)))
-    shared = audit_log(plan, str(log))
-    monkeypatch.setattr(entities, "NO_EVIDENCE", {})
-    own = audit_log(plan, str(log))
-    assert json.dumps(shared.to_json(), sort_keys=True) == json.dumps(own.to_json(), sort_keys=True)
-    assert pickle.loads(pickle.dumps(shared)).to_json() == own.to_json()
-    got = {v.requirement: v for v in shared.verdicts}
+    la = audit_log(plan, str(log))
+    got = {v.requirement: v for v in la.verdicts}
     at_once = [got[f"T[track={i}]"] for i in (1, 3, 4)]
-    assert all(v.verdict == "satisfied" and v.engine == "vectorized" for v in at_once)
-    assert at_once[0].values is at_once[1].values and at_once[0].margin is at_once[2].margin
-    alone = got["T[track=2]"]
-    assert alone.verdict == "violated" and alone.values and alone.values is not at_once[0].values
+    assert all(type(v) is EntityVerdict and v.verdict == "satisfied" for v in at_once)
+    assert type(got["T[track=2]"]) is Verdict and got["T[track=2]"].verdict == "violated"
+    plain = [v.verdict_of() if isinstance(v, EntityVerdict) else v for v in la.verdicts]
+    as_json = json.dumps(la.to_json(), sort_keys=True)
+    la_plain = dataclasses.replace(la, verdicts=plain)
+    assert as_json == json.dumps(la_plain.to_json(), sort_keys=True)
+    back = pickle.loads(pickle.dumps(la))
+    assert json.dumps(back.to_json(), sort_keys=True) == as_json
+    assert at_once[0].robustness == 1.5 and at_once[0].margin == [(0, S, 1.5), (1, S + S // 10, 1.5)]
     with pytest.raises(TypeError, match="assign the verdict a container of its own"):
         at_once[0].values["dist"] = []
-    with pytest.raises(TypeError):
-        at_once[0].margin.append((0, 0, 1.0))
-    assert at_once[1].values == {} and at_once[1].margin == []
-    copied = pickle.loads(pickle.dumps(at_once[0]))
-    copied.values["dist"] = []  # (a copy is the verdict's own)
-    assert at_once[1].values == {}
-    # equal LTL3 verdicts are one object, which cannot change
-    assert at_once[0].ltl3 == Ltl3("unknown", None, None) and at_once[0].ltl3 is at_once[2].ltl3
-    with pytest.raises(dataclasses.FrozenInstanceError):
-        at_once[0].ltl3.status = "violated"  # type: ignore[misc]
+    with pytest.raises(AttributeError):
+        at_once[0].notes.append("x")  # (a tuple: a change is never lost silently)
+    at_once[0].log = "ws://robot:8765"  # (a field changed: a verdict of its own from now)
+    at_once[0].notes.append("watched")
+    at_once[0].values["dist"] = []
+    assert at_once[0].log == "ws://robot:8765" and at_once[0].notes[-1] == "watched"
+    assert at_once[1].log == str(log) and at_once[1].values == {}
+    assert "watched" not in at_once[1].notes
+    assert at_once[0].ltl3 == Ltl3("unknown", None, None)

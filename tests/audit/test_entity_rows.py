@@ -82,7 +82,8 @@ def _rows(rows, names: list[str]) -> list:
 
 
 def _verdicts(la) -> list:
-    return [repr(dataclasses.replace(v, notes=[])) for v in la.verdicts]
+    whole = [v.verdict_of() if hasattr(v, "verdict_of") else v for v in la.verdicts]
+    return [repr(dataclasses.replace(v, notes=[])) for v in whole]
 
 
 ITEM = st.tuples(st.integers(1, 5),

@@ -22,6 +22,8 @@ from __future__ import annotations
 
 import sys
 from pathlib import Path
+from collections.abc import Callable
+from typing import Any
 
 import click
 
@@ -100,7 +102,7 @@ def audit_cmd(ctx: click.Context, logs: tuple[str, ...], requirements: tuple[str
     from fretc.reports.terminal import escape, print_summary
     from fretc.audit.discovery import expand_log_args
     from fretc.audit.fleet.statistics import plan_statistics
-    from fretc.audit.verdict import audit_json, exit_code
+    from fretc.audit.verdict import exit_code, write_audit_json
 
     to_stdout_json = json_path == "-"
     out = Console(stderr=to_stdout_json, width=None if sys.stdout.isatty() else 160,
@@ -132,8 +134,9 @@ def audit_cmd(ctx: click.Context, logs: tuple[str, ...], requirements: tuple[str
     reqs = plan.requirements_json()
     extra = {**plan.sources_json(), **_coverage(plan, results, out, coverage)}
     if json_path:  # (the document only when asked: 100,000 entities' verdicts take seconds)
-        _write_json(audit_json(results, reqs, plan.bindings_json(), input_errors,
-                               allow_partial, extra, stats), json_path)
+        _write_json(lambda write: write_audit_json(
+            write, results, reqs, plan.bindings_json(), input_errors, allow_partial, extra,
+            stats), json_path)
     if junit_path:
         from fretc.common.outputs import write_file
         from fretc.reports.junit import junit_xml  # lazy: only with --junit (start-up time)
@@ -145,14 +148,18 @@ def audit_cmd(ctx: click.Context, logs: tuple[str, ...], requirements: tuple[str
     ctx.exit(code)
 
 
-def _write_json(doc: str, json_path: str) -> None:
-    """``--json PATH``: the audit document to PATH, or to standard output for ``-``."""
+def _write_json(document: Callable[[Callable[[str], Any]], None], json_path: str) -> None:
+    """``--json PATH``: the audit document to PATH, or to standard output for ``-``, written
+    piece by piece (``document(write)``: :func:`fretc.audit.verdict.write_audit_json`), so
+    its memory is a verdict's, not the whole document's; a file whole or not at all."""
     if json_path == "-":
-        click.echo(doc, nl=False)
+        document(sys.stdout.write)
+        sys.stdout.flush()
     else:
-        from fretc.common.outputs import write_file
+        from fretc.common.outputs import open_output
 
-        write_file(json_path, doc)
+        with open_output(json_path) as f:
+            document(f.write)
 
 
 def _mark_coverage(plan, coverage: bool) -> None:
