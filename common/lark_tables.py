@@ -12,10 +12,19 @@ Lark's rule and terminal classes from them.
 
 Start-up CPU of the FRETish parser (``bench/bench_lark_tables.py``): tables built in memory
 about 0.38 s, from this cache about 19 ms (Lark's pickle about 20 ms).
+
+A parser may also ship its tables with fretc (``shipped``: a JSON file of the installed
+package, as trusted as its code, written by :func:`tables_text`): on a miss of the cache (a
+first run, a new cache folder) they are read from there when they were made from the same
+grammar, options and Lark version (tables built in a first run cost 0.4 s of the 0.7 s of a
+first ``fretc FILE --emit monitor``), then kept in the cache; otherwise built. JSON keeps
+what marshal does by tags: a tuple is ``{"__t": [...]}``, a dict ``{"__d": [[key, value],
+...]}`` (its keys may be numbers), a list a list.
 """
 
 from __future__ import annotations
 
+import json
 import marshal
 import sys
 from collections.abc import Callable, Mapping
@@ -23,7 +32,7 @@ from typing import Any
 
 from fretc.common import cache
 
-__all__ = ["cached_parser", "KIND"]
+__all__ = ["cached_parser", "KIND", "tables_text", "shipped_key"]
 
 KIND = "lark"
 _MAGIC = b"fretc lark-tables 1 marshal\n"
@@ -51,17 +60,18 @@ def _plain(value: object, depth: int = 0) -> bool:
 
 
 def cached_parser(name: str, grammar: str, options: Mapping[str, Any],
-                  runtime: Mapping[str, Any], build: Callable[[], Any]) -> Any:
+                  runtime: Mapping[str, Any], build: Callable[[], Any],
+                  shipped: str | None = None) -> Any:
     """A Lark parser of ``grammar`` with ``options`` (LALR) and ``runtime`` options (the
     transformer and the other options Lark takes when it loads tables): loaded from the entry
     ``lark/NAME-KEY.lark`` of fretc's cache when there is a sealed one for the same grammar,
-    options, Lark and Python versions (KEY names them), else ``build()`` (which makes the same
-    parser from the grammar) and its tables kept. The cache off, refused or unwritable, or
-    an entry Lark cannot load: built in memory (the same parser, slower to start). Raises
-    what ``build`` raises."""
+    options, Lark and Python versions (KEY names them), else from the tables ``shipped``
+    with fretc when they were made from the same grammar, options and Lark version (module
+    docstring), else ``build()`` (which makes the same parser from the grammar); tables
+    loaded or built are kept in the cache. The cache off, refused or unwritable, or an entry
+    Lark cannot load: built in memory (the same parser, slower to start). Raises what
+    ``build`` raises."""
     import lark
-    from lark.grammar import Rule
-    from lark.lexer import TerminalDef
 
     key = cache.key_of(f"{name}-grammar", grammar, lark.__version__,
                        "%d.%d" % sys.version_info[:2], repr(sorted(options.items())))
@@ -75,13 +85,93 @@ def cached_parser(name: str, grammar: str, options: Mapping[str, Any],
             return lark.Lark._load_from_dict(tables["data"], tables["memo"], **load)
         except Exception:  # noqa: BLE001 - an entry Lark cannot load is a miss (rebuilt)
             pass
-    parser = build()
+    parser = None
+    if shipped is not None:
+        parser = _from_shipped(shipped, shipped_key(name, grammar, options), load)
+    if parser is None:
+        parser = build()
+    tables = _tables(parser, allowed)
+    if tables is not None:
+        cache.write_sealed(KIND, entry, _MAGIC, made_from, marshal.dumps(tables))
+    return parser
+
+
+def _tables(parser: Any, allowed: Any) -> dict | None:
+    """``parser``'s tables as plain data (:func:`_plain`; the runtime options ``allowed``
+    left out: they are given when loading), or None when Lark cannot serialize them."""
+    from lark.grammar import Rule
+    from lark.lexer import TerminalDef
+
     try:
         data, memo = parser.memo_serialize([TerminalDef, Rule])
         data["options"] = {k: v for k, v in data["options"].items() if k not in allowed}
         tables = {"data": data, "memo": memo}
-        if _plain(tables):
-            cache.write_sealed(KIND, entry, _MAGIC, made_from, marshal.dumps(tables))
     except Exception:  # noqa: BLE001 - tables Lark cannot serialize are not kept
-        pass
-    return parser
+        return None
+    return tables if _plain(tables) else None
+
+
+def shipped_key(name: str, grammar: str, options: Mapping[str, Any]) -> str:
+    """The key of the tables shipped for parser ``name``: its grammar, options and Lark's
+    version (not Python's: JSON, not marshal)."""
+    import lark
+
+    return cache.key_of(f"{name}-shipped", grammar, lark.__version__,
+                        repr(sorted(options.items())))
+
+
+_SHIPPED_FORMAT = "fretc lark tables 1"
+
+
+def tables_text(name: str, grammar: str, options: Mapping[str, Any], parser: Any) -> str:
+    """The tables of ``parser`` (built from ``grammar`` with ``options``) as the text of a
+    shipped tables file (module docstring: the key, Lark's version, the tables tagged).
+
+    Raises:
+        ValueError: Lark cannot serialize the parser's tables as plain data."""
+    import lark
+
+    allowed = getattr(getattr(lark, "lark", None), "_LOAD_ALLOWED_OPTIONS", _RUNTIME)
+    tables = _tables(parser, allowed)
+    if tables is None:
+        raise ValueError(f"the tables of {name} are not plain data")
+    doc = {"format": _SHIPPED_FORMAT, "key": shipped_key(name, grammar, options),
+           "lark": lark.__version__, "tables": _tagged(tables)}
+    return json.dumps(doc, separators=(",", ":")) + "\n"
+
+
+def _tagged(value: Any) -> Any:
+    """Plain data as JSON values (module docstring's tags)."""
+    if type(value) is tuple:
+        return {"__t": [_tagged(v) for v in value]}
+    if type(value) is list:
+        return [_tagged(v) for v in value]
+    if type(value) is dict:
+        return {"__d": [[_tagged(k), _tagged(v)] for k, v in value.items()]}
+    return value
+
+
+def _untag(obj: dict) -> Any:
+    """:func:`_tagged`'s tags read back (a ``json`` object hook)."""
+    if len(obj) == 1:
+        if "__t" in obj:
+            return tuple(obj["__t"])
+        if "__d" in obj:
+            return dict(map(tuple, obj["__d"]))
+    return obj
+
+
+def _from_shipped(path: str, key: str, load: Mapping[str, Any]) -> Any | None:
+    """The parser of the tables shipped at ``path`` when they are of ``key``, else None (a
+    missing or unreadable file, other tables: the caller builds them)."""
+    import lark
+
+    try:
+        with open(path, encoding="utf-8") as f:
+            doc = json.load(f, object_hook=_untag)
+        if doc.get("format") != _SHIPPED_FORMAT or doc.get("key") != key:
+            return None
+        tables = doc["tables"]
+        return lark.Lark._load_from_dict(tables["data"], tables["memo"], **load)
+    except Exception:  # noqa: BLE001 - shipped tables Lark cannot load: built instead
+        return None

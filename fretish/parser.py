@@ -65,6 +65,9 @@ __all__ = ["parse", "parse_expression", "build_lark", "cached_lark", "RESERVED_W
            "RESERVED_LETTERS"]
 
 _GRAMMAR_FILE = os.path.join(os.path.dirname(os.path.abspath(__file__)), "grammar.lark")
+#: The parser's tables shipped with fretc (``python -m fretc.fretish.make_tables`` writes
+#: them; :mod:`fretc.common.lark_tables`): a first run reads them instead of building them.
+TABLES_FILE = os.path.join(os.path.dirname(os.path.abspath(__file__)), "grammar_tables.json")
 _LARK_OPTIONS = dict(parser="lalr", lexer="contextual", start=["start", "expr"],
                      maybe_placeholders=False)
 
@@ -419,13 +422,23 @@ def cached_lark() -> lark.Lark:
     ``lark/fretish-KEY.lark`` (:func:`fretc.common.lark_tables.cached_parser`: a sealed entry
     of plain data, never unpickled): loaded when there is one for the same grammar, options,
     Lark and Python versions (KEY is a hash of them, so editing the grammar or upgrading Lark
-    or Python gives a new entry, never a stale one), else built and written. An entry that
-    cannot be read or loaded is built and written again; when the folder cannot be written,
-    or the cache is off (``FRETC_CACHE_DIR=""``), the tables are built in memory. Raises
+    or Python gives a new entry, never a stale one), else read from the tables shipped with
+    fretc (:data:`TABLES_FILE`) when they were made from the same grammar and Lark version,
+    else built, and written. An entry that cannot be read or loaded is a miss; when the
+    folder cannot be written, or the cache is off (``FRETC_CACHE_DIR=""``), the tables are
+    read from the shipped ones or built in memory. Raises
     :class:`fretc.common.libraries.LibraryError` when the ``lark`` imported is not Lark 1.x."""
     check_lark(lark.__version__)
     return cast(lark.Lark, lark_tables.cached_parser(
-        "fretish", _read_grammar(), _LARK_OPTIONS, {"transformer": _Builder()}, build_lark))
+        "fretish", _read_grammar(), _LARK_OPTIONS, {"transformer": _Builder()}, build_lark,
+        shipped=TABLES_FILE))
+
+
+def tables_text() -> str:
+    """The text of :data:`TABLES_FILE`: the tables of a parser built from ``grammar.lark``
+    now (:func:`fretc.common.lark_tables.tables_text`)."""
+    check_lark(lark.__version__)
+    return lark_tables.tables_text("fretish", _read_grammar(), _LARK_OPTIONS, build_lark())
 
 
 _lock = threading.Lock()
