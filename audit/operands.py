@@ -51,7 +51,8 @@ def operand_values(path: str, plan: AuditPlan, bindings: Bindings,
         source = (first.reopen() if first is not None else None) or open_log(
             path, csv_period_ns=plan.csv_period_ns, msg_path=plan.config.msg_path)
         done: set[ClockKey] = set()
-        blocks = iter(sample_blocks(source, aux_bindings, groups))
+        blocks = iter(sample_blocks(source, aux_bindings, groups,
+                                    _last_time(needs, passes, verdicts)))
         for key, blk in blocks:
             for i in range(len(blk.times)):
                 if (key, blk.start + i) not in at:
@@ -80,6 +81,21 @@ def operand_values(path: str, plan: AuditPlan, bindings: Bindings,
         rows = [(t, int(times[t]), vals[t]) for t in ticks if t in vals]
         if rows:
             v.values[label] = rows
+
+
+def _last_time(needs: list, passes: dict[int, ClockPass], verdicts: dict[int, Verdict]
+               ) -> int | None:
+    """The time (ns, the clock's time base) of the last tick whose operands are shown, over
+    every requirement of ``needs`` ((clock, operand, verdict, ticks)): the read of the
+    operands ends at the first message after it; None when a tick shown has no time."""
+    out = None
+    for _key, _aux, v, ticks in needs:
+        times = next((res.times for i, res in passes.items() if verdicts[i] is v), None)
+        if times is None or not ticks or max(ticks) >= len(times):
+            return None
+        t = int(times[max(ticks)])
+        out = t if out is None else max(out, t)
+    return out
 
 
 def _operands_wanted(bindings: Bindings, active, verdicts):

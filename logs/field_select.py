@@ -123,12 +123,19 @@ def protobuf_picker(descriptor: Any, tree: Tree,
         else:
             steps.append((name, how, dtype, None))
 
+    # (a field kept as it is, most of a message's, read without a call to convert it)
+    order = [(name, how == 0 and sub is None, how, dtype, sub)
+             for name, how, dtype, sub in steps]
+
     def pick(msg: Any) -> SimpleNamespace:
         lies(msg, numbers)
         out = SimpleNamespace()
         d = out.__dict__
-        for name, how, dtype, sub in steps:
+        for name, plain, how, dtype, sub in order:
             value = getattr(msg, name)
-            d[name] = sub(value) if sub is not None else convert(value, how, dtype)
+            if plain:
+                d[name] = value
+            else:
+                d[name] = sub(value) if sub is not None else convert(value, how, dtype)
         return out
     return pick

@@ -178,11 +178,15 @@ class _Group:
 
 
 def sample_blocks(source: LogSource, bindings: Bindings,
-                  groups: dict[Any, tuple[list[str], frozenset[str]]]) -> GroupSampling:
+                  groups: dict[Any, tuple[list[str], frozenset[str]]],
+                  until_ns: int | None = None) -> GroupSampling:
     """Per-requirement clocks in one read of the log, as :func:`fretc.signals.sample_groups`
     (same ticks, values, warm-up and errors), but yielding ``(key, TickBlock)`` pairs. The
     result's ``per_tick`` (key -> variable names) says which bindings were evaluated tick by
-    tick in some block (values that do not fit columns).
+    tick in some block (values that do not fit columns). ``until_ns``: on the log time base,
+    the read stops at the first message past that log time (ns): the ticks up to it are
+    those of the whole read (a tick reads the messages at or before it), the ticks after
+    it are not (the operands of a violation are read only up to the last tick shown).
 
     Raises:
         SignalError: (at the call) a topic of some group missing from the log.  Evaluation
@@ -216,20 +220,24 @@ def sample_blocks(source: LogSource, bindings: Bindings,
         g.per_tick[key] = c.per_tick
         if shared is None:
             buffers[key] = HeaderBuffer(source, sub, s._problems)
+        if until_ns is not None:  # (the grid ticks to it, as the whole read's does: it
+            c.silence_end = until_ns  # is one of its ticks; none past it is read)
         for t in c.own:
             stream.buffers.setdefault(t, _Buffer())
             fed.setdefault(t, []).append(key)
     check_topics(source, _restrict(bindings, []), extra=set(fed), users=bindings)
     install_selective(source, _restrict(bindings, [n for names, _t in groups.values()
                                                    for n in names]))
-    g._iter = _run(g, source, clocks, buffers, fed, shared)
+    g._iter = _run(g, source, clocks, buffers, fed, shared,
+                   until_ns if shared is not None else None)
     return g
 
 
 def _run(g: GroupSampling, source: LogSource, clocks: dict[Any, _Group],
-         buffers: dict[Any, HeaderBuffer], fed: dict[str, list[Any]], shared: _Stream | None
-         ) -> Iterator[tuple[Any, TickBlock]]:
-    """One read of the log, evaluating every clock each :data:`BLOCK` messages."""
+         buffers: dict[Any, HeaderBuffer], fed: dict[str, list[Any]], shared: _Stream | None,
+         until_ns: int | None = None) -> Iterator[tuple[Any, TickBlock]]:
+    """One read of the log, evaluating every clock each :data:`BLOCK` messages (up to the
+    first message past log time ``until_ns``: :func:`sample_blocks`)."""
     count = 0
     by_blocks = getattr(source, "message_blocks", None)
     streams = Streams([b for c in clocks.values() for b in c.variables])
@@ -243,9 +251,14 @@ def _run(g: GroupSampling, source: LogSource, clocks: dict[Any, _Group],
         released = by_blocks(set(fed))
         if released is not None:  # the columnar pass (the log time base reads no header)
             for blocks in released:
+                past = False
                 for topic, log_times, segment in blocks:
                     shared.add_block(topic, log_times, segment)
                     count += len(log_times)
+                    past = past or (until_ns is not None and len(log_times) > 0
+                                    and int(log_times[-1]) > until_ns)
+                if past:  # (the blocks up to a message past it: every tick up to it read)
+                    break
                 if count >= BLOCK:
                     count = 0
                     yield from _evaluate_all(g, clocks, False)
@@ -253,6 +266,8 @@ def _run(g: GroupSampling, source: LogSource, clocks: dict[Any, _Group],
             _missing(clocks)
             return
     for m in streams.messages(source.messages(log_topics(fed)), fed, stream_failed):
+        if until_ns is not None and m.log_time > until_ns:
+            break
         if shared is not None:
             shared.add(m.topic, m.log_time, m.log_time, m.data)
         else:

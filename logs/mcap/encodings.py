@@ -84,6 +84,9 @@ def other_decoder(message_encoding: str, schema_encoding: str, schema_name: str,
 
         loads = cbor2.loads
     else:
+        if tree is not None:  # (the fields read: one function a message, no wrapper each)
+            return _protobuf_selected(schema_name, _as_bytes(schema_data or b""), tree, typ,
+                                      message_encoding)
         pb = _protobuf_decoder(schema_name, _as_bytes(schema_data or b""), tree)
         return _checked(lambda raw: _typed(pb(raw), typ), message_encoding)
     doc = (_json_schema(schema_data) if message_encoding == "json"
@@ -147,6 +150,27 @@ _MESSAGE, _ENUM, _BYTES = 11, 14, 12
 
 def _protobuf_decoder(name: str, fds: bytes, tree: dict | None = None
                       ) -> Callable[[bytes], Any]:
+    make = _protobuf_make(name, fds)
+    if tree is None:
+        return lambda raw: _pb_message(make(raw))
+    picks: dict[Any, Callable[[Any], SimpleNamespace]] = {}
+
+    def selected(raw: bytes) -> SimpleNamespace:
+        msg = make(raw)
+        pick = picks.get(msg.DESCRIPTOR)
+        if pick is None:
+            pick = picks[msg.DESCRIPTOR] = protobuf_picker(msg.DESCRIPTOR, tree, pb_value,
+                                                           _pb_plan, _pb_lies)
+        return pick(msg)
+    return selected
+
+
+def _protobuf_make(name: str, fds: bytes) -> Callable[[bytes], Any]:
+    """mcap-protobuf-support's decoder of ``name`` in the FileDescriptorSet ``fds``
+    (payload -> parsed protobuf message).
+
+    Raises:
+        EncodingError: no schema, one protobuf cannot read, or one without ``name``."""
     from mcap.records import Schema
     from mcap_protobuf.decoder import DecoderFactory
 
@@ -160,18 +184,39 @@ def _protobuf_decoder(name: str, fds: bytes, tree: dict | None = None
                             f"({type(exc).__name__}: {exc})") from None
     if make is None:
         raise EncodingError(f"the protobuf schema does not define {name!r}")
-    if tree is None:
-        return lambda raw: _pb_message(make(raw))
-    picks: dict[Any, Callable[[Any], SimpleNamespace]] = {}
+    return make
 
-    def selected(raw: bytes) -> SimpleNamespace:
-        msg = make(raw)
-        pick = picks.get(msg.DESCRIPTOR)
-        if pick is None:
-            pick = picks[msg.DESCRIPTOR] = protobuf_picker(msg.DESCRIPTOR, tree, pb_value,
-                                                           _pb_plan, _pb_lies)
-        return pick(msg)
-    return selected
+
+def _protobuf_selected(name: str, fds: bytes, tree: dict, typ: str | None, encoding: str
+                       ) -> Callable[[bytes], Any]:
+    """A decoder of ``name``'s protobuf messages to objects holding the fields of ``tree``
+    (:func:`fretc.logs.field_select.protobuf_picker`), with the message type ``typ``: what
+    :func:`_checked` of :func:`_protobuf_decoder`'s gives, in one function a message (the
+    message class parsed from the payload and picked, without the decoder, checker and
+    typing wrappers around it: four Python calls a message fewer).
+
+    Raises:
+        EncodingError: the schema cannot be read or does not define ``name``."""
+    make = _protobuf_make(name, fds)  # (its message class: the type of what it makes)
+    try:
+        cls = type(make(b""))
+    except Exception as exc:  # noqa: BLE001 - a class protobuf will not make: its error
+        raise EncodingError(f"the protobuf schema of {name!r} cannot be read "
+                            f"({type(exc).__name__}: {exc})") from None
+    pick = protobuf_picker(cls.DESCRIPTOR, tree, pb_value, _pb_plan, _pb_lies)
+
+    def decode(raw: bytes) -> Any:
+        try:
+            msg = cls()
+            msg.ParseFromString(raw)
+            out = pick(msg)
+        except (RecursionError, Exception) as exc:  # noqa: BLE001 - protobuf's own errors
+            raise ValueError(f"not a {encoding} message ({type(exc).__name__}: "
+                             f"{str(exc)[:200]})") from None
+        if typ is not None:
+            out.__msgtype__ = typ
+        return out
+    return decode
 
 
 def _repeated(field) -> bool:
