@@ -80,6 +80,10 @@ _ABSENT = object()  # the key of no entity: a filter on it keeps nothing
 #: entities, ``bench/bench_audit.py --entities``; 3.0 s against 2.7 s with the garbage
 #: collector off: the collections that walk them and the memory they hold)
 BATCH = 256
+#: (entity, tick) values a clock reads its entities met so far at every tick for (held on
+#: their own, or through tf()): past it, the requirement is an error saying so rather than
+#: a read whose memory grows with entities times ticks (about 100 bytes a value)
+MAX_EVERY_ROWS = 5_000_000
 #: Whether the per-entity variables that can be are evaluated over rows by numpy
 #: (:mod:`fretc.audit.entities.rows`); False: each at each tick (the reference, for tests)
 VECTORIZED = True
@@ -110,6 +114,7 @@ class EntityClock(Clock):
         self.every = self.held or any(b.uses_tf for b in own)
         #: held on their own: entity -> its newest key message (data, time, log time)
         self.newest: dict[int, tuple[Any, int, int]] = {}
+        self.every_rows = 0  # (entity, tick) values read so far (MAX_EVERY_ROWS)
         self.key_state = EvalState()
         self.present: dict[int, list[int]] = {}  # id(held key message) -> its entities
         self.stream_state = EvalState()
@@ -358,6 +363,14 @@ class EntityClock(Clock):
         its age); else in the messages held at the tick (``tf()``: its frame's newest
         transform)."""
         keys = self.table.keys
+        self.every_rows += len(keys)
+        if self.every_rows > MAX_EVERY_ROWS:
+            raise SignalError(
+                f"the entities {self.kind.name} ({self.kind.key}) are read at every tick "
+                f"({'held on their own' if self.held else 'through tf()'}): more than "
+                f"{MAX_EVERY_ROWS:,} (entity, tick) values ({len(keys):,} entities at tick "
+                f"{self.index}); narrow them with matching = \"GLOB\" in [entities], or "
+                "audit a shorter log")
         if not self.held:
             return [(i, self._values(st, keys[i], i)) for i in range(len(keys))]
         topic, param, newest = self.kind.topic, self.param, self.newest

@@ -129,3 +129,16 @@ def test_the_json_of_the_held_form(tmp_path):
     got = {v["requirement"]: v["verdict"] for lg in doc["logs"] for v in lg["verdicts"]}
     assert got == {"C1": "violated", "C1[car=car_other]": "satisfied",
                    "C1[car=car_ego]": "violated"}
+
+
+def test_entities_read_at_every_tick_are_bounded(tmp_path, monkeypatch):
+    """Entities held on their own are read at every tick: past the bound on (entity, tick)
+    values, the requirement is an error saying so and how to narrow it (exit 2), never a
+    read whose memory grows without bound or an internal error."""
+    import fretc.audit.entities.read as R
+
+    monkeypatch.setattr(R, "MAX_EVERY_ROWS", 20)
+    got = _verdicts(tmp_path, HELD, arena_log(tmp_path / "arena.mcap"))
+    assert got["C1"].verdict == "error", got["C1"]
+    assert "are read at every tick (held on their own): more than 20" in got["C1"].error
+    assert "matching" in got["C1"].error
