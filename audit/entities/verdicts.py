@@ -236,15 +236,19 @@ class EntityVerdict:
     :class:`~fretc.audit.verdict.Verdict`; a change makes it one of its own
     (:meth:`verdict_of`) that every later read and change goes to."""
 
-    __slots__ = ("_b", "_i", "_own")
+    # (``verdict`` kept as an attribute: the field every summary reads, several times a
+    # verdict; one of two shared strings)
+    __slots__ = ("_b", "_i", "_own", "verdict")
     _b: EntityBlock
     _i: int
     _own: Verdict | None
+    verdict: str
 
     def __init__(self, block: EntityBlock, i: int) -> None:
         object.__setattr__(self, "_b", block)
         object.__setattr__(self, "_i", i)
         object.__setattr__(self, "_own", None)
+        object.__setattr__(self, "verdict", block.words[i])
 
     def verdict_of(self) -> Verdict:
         """This verdict as a :class:`~fretc.audit.verdict.Verdict` (its own once changed,
@@ -264,6 +268,8 @@ class EntityVerdict:
             own.margin = list(self._b.field("margin", self._i))
             object.__setattr__(self, "_own", own)
         setattr(self._own, name, value)
+        if name == "verdict":
+            object.__setattr__(self, "verdict", value)
 
     def to_json(self, start: int | None, time_base: str | None = None) -> dict:
         """As :meth:`fretc.audit.verdict.Verdict.to_json` (:meth:`EntityBlock.json`: no
@@ -314,4 +320,5 @@ def _reader(name: str) -> property:
 
 
 for _name in _FIELDS:
-    setattr(EntityVerdict, _name, _reader(_name))
+    if _name != "verdict":  # (a slot of its own)
+        setattr(EntityVerdict, _name, _reader(_name))
