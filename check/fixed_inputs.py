@@ -50,7 +50,8 @@ class Game(Protocol):
     acc: list
 
     @property
-    def step(self) -> Any: ...
+    def step(self) -> Any:
+        """The BDD of the moves that keep every requirement (state, letter, next state)."""
 
     def _primed(self, bdd: Any) -> Any: ...
 

@@ -114,12 +114,16 @@ class WatchedRun(Protocol):
     gaps: list[tuple[int, int]]
 
     @property
-    def absent(self) -> Absences | None: ...
+    def absent(self) -> Absences | None:
+        """The bound topics' spans without a publisher (None: not kept)."""
 
     @property
-    def hears_new_publishers(self) -> bool: ...
+    def hears_new_publishers(self) -> bool:
+        """Whether the client reads a new publisher from its first message."""
 
-    def left_for_good(self, topics: Iterable[str]) -> int | None: ...
+    def left_for_good(self, topics: Iterable[str]) -> int | None:
+        """The earliest start (ns) of a span of ``topics`` open at the run's end while the
+        run went on, or None."""
 
 
 def recorded_gaps(src: WatchedRun) -> list[Gap]:

@@ -34,19 +34,32 @@ class ClientOptions(Protocol):
     merge hold in seconds)."""
 
     @property
-    def url(self) -> str: ...
+    def url(self) -> str:
+        """The server or domain to watch (``ws://``, ``rosbridge://``, ``dds://``, ``zenoh://``)."""
+
     @property
-    def backoff(self) -> float: ...
+    def backoff(self) -> float:
+        """Seconds before the first reconnection."""
+
     @property
-    def max_backoff(self) -> float: ...
+    def max_backoff(self) -> float:
+        """Seconds between reconnections at most (the backoff doubles up to it)."""
+
     @property
-    def types(self) -> dict[str, str] | None: ...
+    def types(self) -> dict[str, str] | None:
+        """Topic -> ROS message type given on the command line (``--topic-type``)."""
+
     @property
-    def msg_path(self) -> tuple[str, ...]: ...
+    def msg_path(self) -> tuple[str, ...]:
+        """Folders of the robot's own ``.msg``/``.idl`` files (``--msg-path``)."""
+
     @property
-    def config(self) -> str | None: ...
+    def config(self) -> str | None:
+        """The middleware's configuration file (``--dds-config``, ``--zenoh-config``)."""
+
     @property
-    def merge_hold(self) -> float: ...
+    def merge_hold(self) -> float:
+        """Seconds a message is held to be merged into log-time order (DDS, Zenoh)."""
 
 
 def make_client(options: ClientOptions, wanted: Callable[[str], bool],

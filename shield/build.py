@@ -156,6 +156,34 @@ def with_margin(compiled: Sequence[Any], margin: int) -> list[Any]:
     return out
 
 
+def _one_period(compiled: Sequence[Any]) -> dict[Any, list[str]]:
+    """The tick periods of ``compiled`` (:class:`fretc.compiler.build.Compiled`; the files'
+    ``@tick_period``) -> the requirements of each, checked before anything reads their
+    formulas.
+
+    Raises:
+        ShieldError: a free-form requirement (no formula), or requirements of different tick
+            periods (the shield steps on one tick: a duration of the other period would count
+            ticks of the wrong length)."""
+    for c in compiled:
+        if c.formalization is None:
+            where = f"{c.entry.source}:{c.entry.line}: {c.id}"
+            raise ShieldError(f"{where} has no formula ({c.error})" if c.error is not None
+                              else f"{where} is free-form text: it has no formula a shield "
+                              "could enforce or monitor; leave it out of the shield's files")
+    periods: dict[Any, list[str]] = {}
+    for c in compiled:
+        if c.entry.tick_period is not None:
+            periods.setdefault(c.entry.tick_period, []).append(
+                f"{c.id} ({c.entry.source}:{c.entry.line})")
+    if len(periods) > 1:
+        raise ShieldError("requirements of different tick periods: " + "; ".join(
+            f"{format_period_ms(t)}: {', '.join(ids)}" for t, ids in sorted(periods.items()))
+            + ". The shield steps on one tick, and each duration counts ticks of its own "
+            "file's period; give the files one @tick_period")
+    return periods
+
+
 def build_shield(compiled: Sequence[Any], inputs: Sequence[str], outputs: Sequence[str], *,
                  bindings: Bindings | None = None, prefer: Sequence[tuple[str, bool]] = (),
                  budget: Budget | None = None, name: str = "shield",
@@ -179,22 +207,7 @@ def build_shield(compiled: Sequence[Any], inputs: Sequence[str], outputs: Sequen
         ShieldUnknown: a component's game past its budget, or comparisons of several
             variables with too many valuations to decide
             (:data:`fretc.shield.predicates.MAX_VALUATIONS`)."""
-    for c in [*compiled, *assumptions]:  # (before anything reads their formulas)
-        if c.formalization is None:
-            where = f"{c.entry.source}:{c.entry.line}: {c.id}"
-            raise ShieldError(f"{where} has no formula ({c.error})" if c.error is not None
-                              else f"{where} is free-form text: it has no formula a shield "
-                              "could enforce or monitor; leave it out of the shield's files")
-    periods: dict[Any, list[str]] = {}
-    for c in [*compiled, *assumptions]:
-        if c.entry.tick_period is not None:
-            periods.setdefault(c.entry.tick_period, []).append(
-                f"{c.id} ({c.entry.source}:{c.entry.line})")
-    if len(periods) > 1:
-        raise ShieldError("requirements of different tick periods: " + "; ".join(
-            f"{format_period_ms(t)}: {', '.join(ids)}" for t, ids in sorted(periods.items()))
-            + ". The shield steps on one tick, and each duration counts ticks of its own "
-            "file's period; give the files one @tick_period")
+    periods = _one_period([*compiled, *assumptions])
     integers = _integer_outputs(compiled, outputs)
     try:
         p = plan(compiled, inputs, outputs, bindings, integers, assumptions)

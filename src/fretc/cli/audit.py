@@ -98,7 +98,6 @@ def audit_cmd(ctx: click.Context, logs: tuple[str, ...], requirements: tuple[str
     # lazy: the audit engine (numpy, mcap, rosbags, rich) only when the command runs
     from rich.console import Console
     from fretc.audit import AuditInputError, find_logs, load_plan
-    from fretc.reports.progress import AuditProgress
     from fretc.reports.terminal import escape, print_summary
     from fretc.audit.discovery import expand_log_args
     from fretc.audit.fleet.statistics import plan_statistics
@@ -123,11 +122,7 @@ def audit_cmd(ctx: click.Context, logs: tuple[str, ...], requirements: tuple[str
     # a requirement that does not formalize is an error verdict on every log: its
     # diagnostic (source line and caret) is printed once, with the other errors
     input_errors = any(r.error is not None for r in plan.requirements)
-    if not no_progress and sys.stderr.isatty():
-        with AuditProgress(err, len(paths)) as prog:
-            results = run_audits(plan, paths, jobs=jobs, progress=prog, ctx=ctx)
-    else:
-        results = run_audits(plan, paths, jobs=jobs, ctx=ctx)
+    results = _run(plan, paths, jobs, ctx, err, progress=not no_progress)
     stats = plan_statistics(plan, results, confidence, unknown_runs, trial)
     print_summary(out, results, plan, verbose=verbose, allow_partial=allow_partial,
                   input_errors=input_errors, statistics=stats)
@@ -160,6 +155,17 @@ def _write_json(document: Callable[[Callable[[str], Any]], None], json_path: str
 
         with open_output(json_path) as f:
             document(f.write)
+
+
+def _run(plan, paths: list[str], jobs: int, ctx: click.Context, err, progress: bool) -> list:
+    """The audits of ``paths`` (:func:`fretc.cli.options.run_audits`), with a progress bar on
+    a terminal's stderr unless ``progress`` is False (``--no-progress``)."""
+    if progress and sys.stderr.isatty():
+        from fretc.reports.progress import AuditProgress
+
+        with AuditProgress(err, len(paths)) as prog:
+            return run_audits(plan, paths, jobs=jobs, progress=prog, ctx=ctx)
+    return run_audits(plan, paths, jobs=jobs, ctx=ctx)
 
 
 def _mark_coverage(plan, coverage: bool) -> None:

@@ -43,6 +43,7 @@ if TYPE_CHECKING:
     from rich.console import Group
 
     from fretc.live.watch import Watch
+    from fretc.live.watch_event import WatchEvent
     from fretc.live.diagnostics import DiagnosticsPublisher
 
 __all__ = ["watch_cmd", "replay_cmd", "live_table", "register", "connection_line"]
@@ -266,7 +267,7 @@ def watch_cmd(ctx: click.Context, url: str, requirements: tuple[str, ...],
     ctx.exit(_report(w, la, w.plan, input_errors, allow_partial, jsonl, record, json_path))
 
 
-def connection_line(e, connect_timeout: float | None) -> str | None:
+def connection_line(e: WatchEvent, connect_timeout: float | None) -> str | None:
     """What the watch says on the terminal about its connection, as ``ros2 topic echo`` and
     Foxglove's client do: at once when the first attempt fails (the URL and the reason),
     then after 2, 4, 8, ... failed attempts (a count, never silence), and once connected
