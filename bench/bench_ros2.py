@@ -55,6 +55,7 @@ import sys, time, rclpy
 from std_msgs.msg import Bool
 from geometry_msgs.msg import Twist
 rate, seconds = float(sys.argv[1]), float(sys.argv[2])
+varying = len(sys.argv) > 3 and sys.argv[3] == "varying"
 rclpy.init()
 n = rclpy.create_node("bench_talker")
 c = n.create_publisher(Bool, "/gwendolen_control", 100)
@@ -69,6 +70,8 @@ while time.monotonic() - t0 < seconds:
     stop = (k // int(rate)) % 2 == 1
     c.publish(Bool(data=stop))
     tw = Twist(); tw.linear.x = 0.0 if stop else 0.3
+    if varying:  # (a field no binding reads: every command's bytes differ, as a sensor's)
+        tw.linear.y = k * 1e-6
     f.publish(tw)
     sent += 2
     delay = nxt - time.monotonic()
@@ -200,7 +203,8 @@ def watch_rate(rate: float, seconds: float, hold: float, watermark: bool = True
                        "angular_speed <= 0.5\n")
         plan = load_plan(AuditConfig(requirements=[str(req)],
                                      bindings=[str(REQS / "safe_ros.bindings.toml")]))
-        pub = subprocess.Popen([sys.executable, "-c", _PUBLISHER, str(rate), str(seconds)],
+        pub = subprocess.Popen([sys.executable, "-c", _PUBLISHER, str(rate), str(seconds),
+                                *VARYING],
                                env={**os.environ, "ROS_DOMAIN_ID": str(domain)},
                                stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
         w = Watch(plan, WatchOptions(url=f"dds://{domain}", duration=seconds + 5, wait=10,
@@ -279,6 +283,10 @@ print(got)
 """
 
 
+#: ``--varying``: the publisher's commands differ in every message (set by :func:`main`)
+VARYING: list[str] = []
+
+
 def plain_rate(rate: float, seconds: float) -> tuple[int, int]:
     """Part 3's plain subscriber at one rate: (sent, read)."""
     domain = random.randint(1, 99)
@@ -286,7 +294,8 @@ def plain_rate(rate: float, seconds: float) -> tuple[int, int]:
     sub = subprocess.Popen([sys.executable, "-c", _PLAIN, str(domain), str(seconds + 6)],
                            stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
     time.sleep(1.0)  # its readers up before the publisher starts (it waits 2 s more)
-    pub = subprocess.Popen([sys.executable, "-c", _PUBLISHER, str(rate), str(seconds)], env=env,
+    pub = subprocess.Popen([sys.executable, "-c", _PUBLISHER, str(rate), str(seconds), *VARYING],
+                           env=env,
                            stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
     sent, _ = pub.communicate(timeout=seconds + 60)
     read, _ = sub.communicate(timeout=seconds + 60)
@@ -324,7 +333,12 @@ def main() -> int:
     ap.add_argument("--rates", type=float, nargs="+", default=[100, 1000, 2000, 5000])
     ap.add_argument("--seconds", type=float, default=10)
     ap.add_argument("--parts", type=int, nargs="+", default=[1, 2, 3], choices=[1, 2, 3])
+    ap.add_argument("--varying", action="store_true",
+                    help="parts 2 and 3: every command's bytes differ (a field no binding "
+                         "reads counts up), as a sensor's messages do; by default a command "
+                         "repeats for a second, as a robot's commands and flags do")
     args = ap.parse_args()
+    VARYING[:] = ["varying"] if args.varying else []
     try:
         import rclpy  # noqa: F401
     except ImportError:

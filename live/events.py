@@ -118,6 +118,8 @@ class EventQueue:
     def take_dropped(self) -> dict[str, tuple[int, int, int]]:
         """Messages dropped since the last call: topic -> (count, first log time, last log
         time) in ns; empty when none."""
+        if not self._dropped:  # (read without the lock: a drop seen a message late is
+            return {}          # taken at the next call, before its gap would close)
         with self._cond:
             out = {t: (c, a, b) for t, (c, a, b) in self._dropped.items()}
             self._dropped.clear()

@@ -177,6 +177,10 @@ class WatchSource(LogSource):
         self.absent = Absences()
         #: bound topics not advertised yet that the run waits for (the watch sets them)
         self.awaited: set[str] = set()
+        #: per topic, its last payload and the message decoded from it: a message of the
+        #: same bytes is that message again (read-only: no binding changes a message), not
+        #: decoded again (a robot's commands and flags repeat at tens of kHz)
+        self._decoded: dict[str, tuple[bytes, Any]] = {}
         #: called with each topic advertised for the first time (the watch's late checks)
         self.on_advertised: Callable[[str], None] | None = None
         self._delivered = 0
@@ -549,12 +553,17 @@ class WatchSource(LogSource):
         if why is not None:
             self._skipped(topic, log_time, TIME_RANGE, why, None)
             return None
-        try:
-            data = dec(payload)
-        except DECODE_ERRORS as exc:
-            self._undecodable(topic, log_time, f"payload of {len(payload)} bytes does not "
-                              f"deserialize ({type(exc).__name__}: {exc})")
-            return None
+        last = self._decoded.get(topic)
+        if last is not None and last[0] == payload:
+            data = last[1]  # the same bytes as the topic's last message: the same message
+        else:
+            try:
+                data = dec(payload)
+            except DECODE_ERRORS as exc:
+                self._undecodable(topic, log_time, f"payload of {len(payload)} bytes does not "
+                                  f"deserialize ({type(exc).__name__}: {exc})")
+                return None
+            self._decoded[topic] = (payload, data)
         if self._last_time is not None and log_time < self._last_time:
             self._skipped(topic, log_time, CLOCK_BACKWARDS,
                           f"log time {log_time} is {self._last_time - log_time} ns before a "

@@ -326,6 +326,9 @@ class Clock:
             if t is not None and t in self.counted:
                 self.watched.setdefault(t, []).append(b)
         self.last_values: dict[str, Any] = {}
+        #: topic -> (the message :meth:`_missed` last evaluated, the tick index then, the
+        #: bindings it changed)
+        self._missed_memo: dict[str, tuple[Any, int, list[str]]] = {}
         #: topics whose previous message a binding reads (@delta ...): held too, and
         #: waited for (warm-up) until the second message
         self.stateful: set[str] = set().union(*(stateful_topics(b.ast) for b in self.variables))
@@ -458,19 +461,31 @@ class Clock:
 
     def _missed(self, topic: str) -> None:
         """Count a change of a watched binding on the held message of ``topic``, which no
-        tick sampled (:attr:`Sampling.missed_changes`)."""
+        tick sampled (:attr:`Sampling.missed_changes`). A watched binding reads that
+        message's fields alone (:func:`fretc.signals.between_ticks.single_topic`), so the
+        same message object held again since the last tick (a live source gives one object
+        for a repeated payload) changes the same bindings: counted without evaluating."""
         mc = self.s.missed_changes
-        for b in self.watched[topic]:
-            if b.name not in self.last_values or b not in self.variables:
-                continue
-            with np.errstate(all="ignore"):
-                try:
-                    v = b.evaluate(self.state)
-                except SignalError:
+        data = self.state.msgs.get(topic)
+        memo = self._missed_memo.get(topic)
+        if memo is not None and memo[0] is data and memo[1] == self.index:
+            changed = memo[2]
+        else:
+            changed = []
+            for b in self.watched[topic]:
+                if b.name not in self.last_values or b not in self.variables:
                     continue
-            w = self.last_values[b.name]
-            if not (v == w or (v != v and w != w)):
-                mc[b.name] = mc.get(b.name, 0) + 1
+                with np.errstate(all="ignore"):
+                    try:
+                        v = b.evaluate(self.state)
+                    except SignalError:
+                        continue
+                w = self.last_values[b.name]
+                if not (v == w or (v != v and w != w)):
+                    changed.append(b.name)
+            self._missed_memo[topic] = (data, self.index, changed)
+        for name in changed:
+            mc[name] = mc.get(name, 0) + 1
 
     def _fold_in(self, topic: str) -> None:
         """The value of the message of ``topic`` just held, for the aggregated bindings
