@@ -1,0 +1,173 @@
+"""``fretc shield-replay``: a generated shield run over recorded runs
+(:mod:`fretc.shield.replay`): what the Safety System would have done on the robot's runs.
+
+::
+
+    fretc shield-replay SHIELD_DIR LOGS... -o DIR [-r FILE]... [--json FILE]
+
+For each log, writes ``DIR/NAME.shielded.mcap`` (every recorded message as it was, the
+shield's corrected outputs added on their topics at each tick), prints the overrides per
+requirement and the audit of the shielded run. Exit status: the audit's of the shielded
+runs (0 every verdict satisfied or vacuous, 1 a requirement violated, 3 a log partial or
+with data problems, an unknown verdict); 2 input errors (the folder, a log, a topic, a log
+time named).
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+from typing import Any
+
+import click
+
+from fretc.cli.options import shown
+
+__all__ = ["shield_replay_cmd"]
+
+
+@click.command("shield-replay")
+@click.argument("shield_dir", type=click.Path(file_okay=False))
+@click.argument("logs", nargs=-1, required=True)
+@click.option("-o", "--output", "out_dir", type=click.Path(file_okay=False), required=True,
+              help="The folder the shielded recordings (NAME.shielded.mcap) are written to.")
+@click.option("-r", "--requirements", "requirements", multiple=True, metavar="PATH",
+              help="The requirements the shielded runs are audited against (repeatable); "
+              "default: the files the shield's enforced requirements were read from.")
+@click.option("--json", "json_path", type=click.Path(dir_okay=False), default=None,
+              help="Write the overrides and the audit of each shielded run as JSON to FILE "
+              "('-': stdout).")
+@click.pass_context
+def shield_replay_cmd(ctx: click.Context, shield_dir: str, logs: tuple[str, ...],
+                      out_dir: str, requirements: tuple[str, ...],
+                      json_path: str | None) -> None:
+    """Run the shield of SHIELD_DIR (fretc shield --emit python -b BINDINGS -o DIR) over
+    recorded runs (LOGS: .mcap, .bag, rosbag2 folders): write each shielded recording
+    into DIR (every recorded message as it was; the corrected outputs added at each tick
+    of the requirements), print the overrides per requirement and the audit of the
+    shielded run.
+
+    \b
+    Exit codes:
+      0  every verdict of the shielded runs satisfied or vacuous
+      1  a requirement is violated in a shielded run
+      2  usage or input error (the folder, a log, a topic or a log time named)
+      3  no violation, but a log is partial or had data problems, or a verdict
+         is unknown"""
+    from fretc.common.outputs import output_folder
+    from fretc.shield.replay import ReplayError, load_folder, replay_log, shielded_name
+
+    folder = load_folder(shield_dir)
+    reqs = requirements or tuple(folder.sources())
+    absent = [r for r in reqs if not Path(r).exists()]
+    if absent or not reqs:
+        raise ReplayError(f"{folder.module}: the requirement files it was generated from ("
+                          f"{', '.join(absent) or 'none named'}) are not here: give the "
+                          "requirements to audit the shielded runs with -r FILE")
+    names = [shielded_name(log) for log in logs]
+    twice = sorted({n for n in names if names.count(n) > 1})
+    if twice:
+        raise ReplayError(f"two logs would be written to {', '.join(twice)} in {out_dir}: "
+                          "replay them into different folders")
+    output_folder(out_dir)
+    results = []
+    for log, name in zip(logs, names):
+        result = replay_log(folder, log, Path(out_dir) / name)
+        results.append(result)
+        click.echo(shown(_overrides_text(result)))
+    click.echo(shown("enforced by the shield: " + (", ".join(folder.requirements) or "none")
+                     + "; any other requirement is judged on the recorded inputs (a replay "
+                     "does not move the robot: what its sensors saw is as recorded)"),
+               err=json_path == "-")
+    audits, code = _audit(reqs, str(folder.bindings_file), [r.written for r in results],
+                          to_stdout=json_path == "-")
+    if json_path:
+        doc = {"shield": str(folder.module), "bindings": str(folder.bindings_file),
+               "requirements": list(reqs),
+               "runs": [{**r.as_json(), "audit": a.to_json()} for r, a in zip(results, audits)]}
+        _write_json(doc, json_path)
+    ctx.exit(code)
+
+
+def _ticks(n: int) -> str:
+    return f"{n} tick" if n == 1 else f"{n} ticks"
+
+
+def _time(t: int | None, start: int | None) -> str:
+    """A log time (ns) as seconds from the replay's first tick."""
+    return "-" if t is None or start is None else f"{(t - start) / 1e9:.3f} s"
+
+
+def _overrides_text(r: Any) -> str:
+    """The terminal lines of one replay: what was written, the ticks, the overrides per
+    requirement (ticks, first and last), the faults and what was kept under another topic."""
+    s = r.first_tick
+    lines = [f"shield replay {r.log} -> {r.written}: {r.ticks} ticks "
+             f"({_time(r.first_tick, s)} .. {_time(r.last_tick, s)} from the first tick, "
+             f"log time {r.first_tick} ns), {r.overridden.ticks} overridden"]
+    for rid, span in r.overrides.items():
+        lines.append(f"  {rid}: {_ticks(span.ticks)} overridden, first {_time(span.first, s)}, "
+                     f"last {_time(span.last, s)}")
+    if not r.overrides:
+        lines.append("  no requirement's machine overrode the proposal")
+    for label, span in (("no message the bindings give (no requirement broken)", r.unshaped),
+                        ("an input not read: the fallback published", r.input_faults),
+                        ("a proposal not read: replaced", r.proposal_faults),
+                        ("nothing published (no fallback)", r.silent)):
+        if span.ticks:
+            lines.append(f"  {label}: {_ticks(span.ticks)}, first {_time(span.first, s)} "
+                         f"({span.why}), last {_time(span.last, s)}")
+    for a, t in r.broken.items():
+        lines.append(f"  assumption {a} of the environment broken at {_time(t, s)}: the "
+                     "shield's guarantee no longer holds from there")
+    for topic, kept in r.renamed.items():
+        lines.append(f"  recorded {topic} kept as {kept} (the shield publishes {topic})")
+    if r.problems:
+        lines.append(f"  the log's data problems: {len(r.problems)} (fretc audit of the log "
+                     f"lists them): {r.problems[0]}")
+    return "\n".join(lines)
+
+
+def _audit(requirements: tuple[str, ...], bindings_file: str, paths: list[str],
+           to_stdout: bool) -> tuple[list[Any], int]:
+    """The audit of the shielded recordings ``paths`` with ``requirements`` and the
+    shield's binding file, printed as ``fretc audit`` prints it; (the logs' audits, the
+    exit code)."""
+    from rich.console import Console
+
+    from fretc.audit import AuditInputError, audit_logs, load_plan
+    from fretc.audit.verdict import exit_code
+    from fretc.cli.options import audit_config
+    from fretc.reports.terminal import escape, print_summary
+
+    out = Console(stderr=to_stdout, width=None if sys.stdout.isatty() else 160,
+                  highlight=False, emoji=False)
+    config = audit_config(requirements, (bindings_file,), (), None, None, None, 5)
+    try:
+        plan = load_plan(config)
+    except AuditInputError as exc:
+        Console(stderr=True, highlight=False, soft_wrap=True).print(
+            f"[red]error:[/red] {escape(str(exc))}")
+        sys.exit(2)
+    for w in plan.warnings:
+        out.print(f"[yellow]warning:[/yellow] {escape(w)}")
+    results = audit_logs(plan, paths)
+    input_errors = any(r.error is not None for r in plan.requirements)
+    click.echo(shown("audit of the shielded run" + ("s" if len(paths) > 1 else "") + ":"),
+               err=to_stdout)
+    print_summary(out, results, plan, input_errors=input_errors,
+                  command="fretc shield-replay")
+    return results, exit_code(results, input_errors)
+
+
+def _write_json(doc: dict[str, Any], json_path: str) -> None:
+    """``doc`` as JSON to ``json_path`` ('-': stdout), through the repo's writer (never
+    through a link planted there)."""
+    text = json.dumps(doc, indent=2, sort_keys=False) + "\n"
+    if json_path == "-":
+        sys.stdout.write(text)
+        return
+    from fretc.common.outputs import write_file
+
+    write_file(json_path, text)
