@@ -75,7 +75,7 @@ def shield_replay_cmd(ctx: click.Context, shield_dir: str, logs: tuple[str, ...]
     for log, name in zip(logs, names):
         result = replay_log(folder, log, Path(out_dir) / name)
         results.append(result)
-        click.echo(shown(_overrides_text(result)))
+        click.echo(shown(_overrides_text(result)), err=json_path == "-")
     click.echo(shown("enforced by the shield: " + (", ".join(folder.requirements) or "none")
                      + "; any other requirement is judged on the recorded inputs (a replay "
                      "does not move the robot: what its sensors saw is as recorded)"),
