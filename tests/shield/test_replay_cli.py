@@ -100,3 +100,86 @@ def test_a_link_planted_at_the_output_is_not_written_through(shield_dir, tmp_pat
     assert got.exit_code == 0, got.output
     assert victim.read_text() == "keep"
     assert not (out / "sif_disabled.shielded.mcap").is_symlink()
+
+
+def copy_mcap(src: Path, dst: Path, keep) -> None:
+    """``src`` copied to ``dst`` by the mcap library, the messages ``keep(topic, log_time)``
+    refuses left out."""
+    from mcap.reader import make_reader
+    from mcap.writer import Writer
+
+    with open(src, "rb") as f, open(dst, "wb") as g:
+        w = Writer(g)
+        w.start()
+        schemas, channels = {}, {}
+        for schema, channel, m in make_reader(f).iter_messages(log_time_order=True):
+            if not keep(channel.topic, m.log_time):
+                continue
+            if schema.id not in schemas:
+                schemas[schema.id] = w.register_schema(schema.name, schema.encoding,
+                                                       schema.data)
+            if channel.id not in channels:
+                channels[channel.id] = w.register_channel(
+                    channel.topic, channel.message_encoding, schemas[schema.id],
+                    dict(channel.metadata))
+            w.add_message(channels[channel.id], m.log_time, m.data, m.publish_time,
+                          m.sequence)
+        w.finish()
+
+
+def test_ticks_before_the_first_scan_publish_the_fallback_and_say_so(shield_dir, tmp_path):
+    from rosbags.typesys import Stores, get_typestore
+
+    start = min(t for t, *_ in by_topic(TRACE)["/scan"])
+    late = start + 1_000_000_000  # (the LiDAR's first scan a second after the rest)
+    copy_mcap(TRACE, tmp_path / "late.mcap", lambda topic, t: topic != "/scan" or t >= late)
+    got = run("shield-replay", str(shield_dir), str(tmp_path / "late.mcap"), "-o",
+              str(tmp_path / "out"), "-r", str(REPO / "requirements" / "shield" /
+                                                "release.fret"), "--json",
+              str(tmp_path / "r.json"))
+    assert got.exit_code in (0, 1), got.output
+    doc = json.loads((tmp_path / "r.json").read_text())["runs"][0]
+    faults = doc["input_faults"]
+    # the first tick is the grid's first at or after the first message the shield reads
+    # (a proposal on /cmd_vel, 50 ms in); every tick before the first scan is a fault
+    first = -(-min(t for t, *_ in by_topic(TRACE)["/cmd_vel"]) // 100_000_000) * 100_000_000
+    n = (late - first) // 100_000_000
+    assert n == 9 and faults["ticks"] == n and faults["first_log_time"] == doc["first_tick"]
+    assert doc["first_tick"] == first and start < first
+    assert faults["last_log_time"] == late - 100_000_000 and "/scan" in faults["why"]
+    assert f"an input not read: the fallback published: {n} ticks" in got.output
+    store = get_typestore(Stores.ROS2_JAZZY)
+    after = by_topic(tmp_path / "out" / "late.shielded.mcap")
+    for topic, want in (("/cmd_vel_filtered", lambda m: m.linear.x == m.angular.z == 0),
+                        ("/gwendolen_control", lambda m: m.data is True)):
+        early = [store.deserialize_cdr(data, name) for t, data, name, _d in after[topic]
+                 if t < late]
+        assert len(early) == n and all(want(m) for m in early), topic
+    # from the first scan on, the shield decides as on the whole run
+    assert doc["overrides"]["R9"]["ticks"] == 47
+
+
+def test_a_rosbag2_folder_is_replayed_with_its_messages_kept(shield_dir, tmp_path):
+    from mcap.reader import make_reader
+    from rosbags.rosbag2 import Writer
+    from rosbags.typesys import Stores, get_typestore
+
+    store = get_typestore(Stores.ROS2_JAZZY)
+    bag = tmp_path / "run_bag"
+    with Writer(bag, version=9) as w, open(TRACE, "rb") as f:
+        conns = {}
+        for schema, channel, m in make_reader(f).iter_messages(log_time_order=True):
+            if channel.topic not in conns:
+                conns[channel.topic] = w.add_connection(channel.topic, schema.name,
+                                                        typestore=store)
+            w.write(conns[channel.topic], m.log_time, m.data)
+    got = run("shield-replay", str(shield_dir), str(bag), "-o", str(tmp_path / "out"), "-r",
+              str(REPO / "requirements" / "shield" / "release.fret"))
+    assert got.exit_code in (0, 1), got.output
+    before = by_topic(TRACE)
+    after = by_topic(tmp_path / "out" / "run_bag.shielded.mcap")
+    for topic, messages in before.items():
+        kept = after["/recorded" + topic if topic in ("/cmd_vel_filtered",
+                                                      "/gwendolen_control") else topic]
+        assert [(t, d) for t, d, *_ in kept] == [(t, d) for t, d, *_ in messages], topic
+    assert "R9: 47 ticks overridden" in got.output  # (as from the MCAP file itself)
