@@ -183,3 +183,26 @@ def test_a_rosbag2_folder_is_replayed_with_its_messages_kept(shield_dir, tmp_pat
                                                       "/gwendolen_control") else topic]
         assert [(t, d) for t, d, *_ in kept] == [(t, d) for t, d, *_ in messages], topic
     assert "R9: 47 ticks overridden" in got.output  # (as from the MCAP file itself)
+
+
+def test_json_to_stdout_is_the_document_alone(shield_dir, tmp_path):
+    import subprocess
+    import sys
+
+    done = subprocess.run([sys.executable, "-m", "fretc", "shield-replay", str(shield_dir),
+                           str(TRACE), "-o", str(tmp_path / "out"), "-r",
+                           str(REPO / "requirements" / "shield" / "release.fret"), "--json",
+                           "-"], capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    doc = json.loads(done.stdout)  # (the overrides and the audit's table on stderr)
+    assert doc["runs"][0]["overrides"]["R9"]["ticks"] == 47
+    assert "R9: 47 ticks overridden" in done.stderr
+
+
+def test_a_cut_recording_is_an_input_error_and_writes_nothing(shield_dir, tmp_path):
+    cut = tmp_path / "cut.mcap"
+    cut.write_bytes(TRACE.read_bytes()[:300_000])
+    got = run("shield-replay", str(shield_dir), str(cut), "-o", str(tmp_path / "out"))
+    assert got.exit_code == 2, got.output
+    assert "cut.mcap" in got.output and "cannot be copied as they were" in got.output
+    assert list((tmp_path / "out").iterdir()) == []
