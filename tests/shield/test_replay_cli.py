@@ -206,3 +206,12 @@ def test_a_cut_recording_is_an_input_error_and_writes_nothing(shield_dir, tmp_pa
     assert got.exit_code == 2, got.output
     assert "cut.mcap" in got.output and "cannot be copied as they were" in got.output
     assert list((tmp_path / "out").iterdir()) == []
+
+
+def test_the_same_replay_writes_the_same_bytes(shield_dir, tmp_path):
+    for out in ("a", "b"):
+        got = run("shield-replay", str(shield_dir), str(TRACE), "-o", str(tmp_path / out),
+                  "-r", str(REPO / "requirements" / "shield" / "release.fret"))
+        assert got.exit_code == 0, got.output
+    assert (tmp_path / "a" / "sif_disabled.shielded.mcap").read_bytes() == \
+        (tmp_path / "b" / "sif_disabled.shielded.mcap").read_bytes()

@@ -147,11 +147,12 @@ def _audit(requirements: tuple[str, ...], bindings_file: str, paths: list[str],
     try:
         plan = load_plan(config)
     except AuditInputError as exc:
-        Console(stderr=True, highlight=False, soft_wrap=True).print(
+        Console(stderr=True, highlight=False, soft_wrap=True, emoji=False).print(
             f"[red]error:[/red] {escape(str(exc))}")
         sys.exit(2)
-    for w in plan.warnings:
-        out.print(f"[yellow]warning:[/yellow] {escape(w)}")
+    err = Console(stderr=True, highlight=False, soft_wrap=True, emoji=False)
+    for w in plan.warnings:  # (on stderr, as fretc audit prints them)
+        err.print(f"[yellow]warning:[/yellow] {escape(w)}")
     results = audit_logs(plan, paths)
     input_errors = any(r.error is not None for r in plan.requirements)
     click.echo(shown("audit of the shielded run" + ("s" if len(paths) > 1 else "") + ":"),
