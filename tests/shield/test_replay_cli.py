@@ -215,3 +215,25 @@ def test_the_same_replay_writes_the_same_bytes(shield_dir, tmp_path):
         assert got.exit_code == 0, got.output
     assert (tmp_path / "a" / "sif_disabled.shielded.mcap").read_bytes() == \
         (tmp_path / "b" / "sif_disabled.shielded.mcap").read_bytes()
+
+
+@pytest.mark.parametrize("edit, named", [
+    (lambda t: t.replace('"/gwendolen_control" = "std_msgs/msg/Bool"',
+                         '"/gwendolen_control" = "std_msgs/msg/Nope"'),
+     "/gwendolen_control (std_msgs/msg/Nope)"),
+    (lambda t: t.replace('time = "log"', 'time = "header"'), "time = 'header'"),
+    (lambda t: t.replace('"/cmd_vel_filtered" = "/cmd_vel" }', '"/cmd_vel_filtered" = "/odom_cmd" }'),
+     "no message of /odom_cmd"),
+], ids=["unknown type", "header time base", "proposal topic not recorded"])
+def test_a_binding_file_the_replay_cannot_take_is_an_input_error(shield_dir, tmp_path, edit,
+                                                                 named):
+    import shutil
+
+    folder = tmp_path / "shield"
+    shutil.copytree(shield_dir, folder)
+    toml = next(folder.glob("*.bindings.toml"))
+    toml.write_text(edit(toml.read_text()))
+    got = run("shield-replay", str(folder), str(TRACE), "-o", str(tmp_path / "out"), "-r",
+              str(REPO / "requirements" / "shield" / "release.fret"))
+    assert got.exit_code == 2, got.output
+    assert named in got.output and "Traceback" not in got.output
