@@ -237,3 +237,23 @@ def test_a_binding_file_the_replay_cannot_take_is_an_input_error(shield_dir, tmp
               str(REPO / "requirements" / "shield" / "release.fret"))
     assert got.exit_code == 2, got.output
     assert named in got.output and "Traceback" not in got.output
+
+
+def test_the_recorded_run_violates_what_the_shielded_run_satisfies(shield_dir, tmp_path):
+    """The page's claim: as recorded (the SIF switched off), R2 and R9 are violated on
+    ``sif_disabled``; shielded, satisfied."""
+    reqs = ["-r", str(REPO / "requirements" / "safe_ros.fret"), "-r",
+            str(REPO / "requirements" / "shield" / "release.fret")]
+    bindings = str(next(shield_dir.glob("*.bindings.toml")))
+    got = run("audit", *reqs, "-b", bindings, str(TRACE), "--no-progress", "--json",
+              str(tmp_path / "a.json"))
+    assert got.exit_code == 1, got.output
+    recorded = {v["requirement"]: v["verdict"]
+                for v in json.loads((tmp_path / "a.json").read_text())["logs"][0]["verdicts"]}
+    got = run("shield-replay", str(shield_dir), str(TRACE), "-o", str(tmp_path / "out"),
+              *reqs, "--json", str(tmp_path / "r.json"))
+    shielded = {v["requirement"]: v["verdict"] for v in json.loads(
+        (tmp_path / "r.json").read_text())["runs"][0]["audit"]["verdicts"]}
+    assert recorded["R2"] == recorded["R9"] == "violated"
+    assert shielded["R2"] == shielded["R9"] == "satisfied"
+    assert recorded["R5"] == shielded["R5"] == "violated"  # (the plant's: as recorded)
