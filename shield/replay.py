@@ -377,6 +377,25 @@ def _decide(shield: MessageShield, t: int, result: ReplayResult
     return msgs
 
 
+def _shielded(shield: MessageShield, outputs: _Outputs,
+              events: Iterator[tuple[int | None, Any]], result: ReplayResult
+              ) -> Iterator[Record]:
+    """The shield's messages over ``events`` (:func:`_ticks`), tick by tick in log-time
+    order, each decision counted in ``result``."""
+    sequence: dict[str, int] = {}
+    for t, m in events:
+        if t is None:
+            shield.hear(m.topic, m.data, int(m.log_time))
+            continue
+        result.ticks += 1
+        result.first_tick = t if result.first_tick is None else result.first_tick
+        result.last_tick = t
+        for topic, msg in _decide(shield, t, result):
+            sequence[topic] = sequence.get(topic, 0) + 1
+            result.published[topic] = result.published.get(topic, 0) + 1
+            yield outputs.record(topic, msg, t, sequence[topic])
+
+
 def replay_log(folder: ShieldFolder, log: str | os.PathLike[str], out: str | os.PathLike[str],
                msg_path: tuple[str, ...] = ()) -> ReplayResult:
     """Run the shield of ``folder`` over the recording ``log`` and write the shielded
@@ -397,20 +416,6 @@ def replay_log(folder: ShieldFolder, log: str | os.PathLike[str], out: str | os.
     needed, types = _needed(folder, bindings, shield, source, log)
     outputs = _Outputs(bindings, types, str(folder.bindings_file))
     result = ReplayResult(log=log, written=os.fspath(out))
-    shielded: list[Record] = []
-    sequence: dict[str, int] = {}
-    for t, m in _ticks(source, needed, bindings, log):
-        if t is None:
-            shield.hear(m.topic, m.data, int(m.log_time))
-            continue
-        result.ticks += 1
-        result.first_tick = t if result.first_tick is None else result.first_tick
-        result.last_tick = t
-        for topic, msg in _decide(shield, t, result):
-            sequence[topic] = sequence.get(topic, 0) + 1
-            shielded.append(outputs.record(topic, msg, t, sequence[topic]))
-            result.published[topic] = result.published.get(topic, 0) + 1
-    result.problems = [str(p) for p in source.problems]
     recorded = set(source.topics())
     result.renamed = {t: recorded_topic(t) for t in sorted(set(types) & recorded)}
     taken = sorted(t for t in result.renamed.values() if t in recorded)
@@ -418,6 +423,10 @@ def replay_log(folder: ShieldFolder, log: str | os.PathLike[str], out: str | os.
         raise ReplayError(f"{log}: {', '.join(taken)} is recorded already: the recorded "
                           "messages of the topics the shield publishes on cannot be kept "
                           "there")
-    result.written_counts = write_shielded(out, recorded_records(log, source.kind), shielded,
-                                           result.renamed)
+    # (both streams read as the file is written: memory does not grow with the log)
+    result.written_counts = write_shielded(
+        out, recorded_records(log, source.kind),
+        _shielded(shield, outputs, _ticks(source, needed, bindings, log), result),
+        result.renamed)
+    result.problems = [str(p) for p in source.problems]
     return result
