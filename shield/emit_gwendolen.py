@@ -1,212 +1,285 @@
-"""``fretc shield --emit gwendolen``: the Safety Instrumented Function as a Gwendolen agent, its
-AJPF verification environment and the properties AJPF checks on it (Safe-ROS, Benjumea,
-Farrell, Dennis, FMAS 2025: Listings 2, 4 and 5, generated).
+"""``fretc shield --emit gwendolen``: the Safety System as a Gwendolen agent that decides as the
+shield decides, its AJPF verification environment and the properties AJPF checks on it
+(Safe-ROS, Benjumea, Farrell, Dennis, FMAS 2025, Listings 2, 4 and 5: the SIF as a Gwendolen
+agent, its environment and its AJPF properties; here generated from the requirements).
 
-Files (``N`` the shield's name, ``A`` the agent):
+Files (``N`` the shield's name made an identifier, ``A`` the agent: the component of the first
+enforced requirement, Safe-ROS's ``agilex_agent``):
 
-* ``N.gwen``: the agent ``A`` (the component of the first enforced requirement: Safe-ROS's
-  ``agilex_agent``). Each enforced requirement of the shape "[whenever|upon] C, A shall
-  [timing] satisfy R", C a conjunction of boolean literals (or none) and R a conjunction of
-  literals of boolean outputs, becomes plans ``+c: {guards} <- set_r, +r;``: on the belief
-  (a percept, or a belief the agent added itself) that completes C, act to make each literal
-  of R true (the action ``set_r``/``clear_r``) and believe it. ``never`` R makes R's
-  negation hold instead (R one literal; the negation of a conjunction is a disjunction, not
-  in the agent). A requirement without a condition is an initial goal; one whose condition
-  is negated literals only (``whenever !i1``) holds from the start, so it gets an initial
-  goal beside its plans. What has another shape (a number compared, a disjunction,
-  a mode scope) is not in the agent: listed in its header, enforced by the other forms.
-* ``N_env.java``: the verification environment (a ``VerificationofAutonomousSystemsEnvironment``
-  as the paper's): at each perception every input variable is perceived or not by AJPF's
-  boolean choice, so the model checker explores every input sequence.
-* ``N.ail``: the AIL configuration (the agent, its builder, the environment).
-* ``N.psl``: one property per requirement in the agent, ``[] (C -> <> R)`` over the agent's
-  beliefs (``[] (C -> <> ~R)`` for ``never`` R).
+* ``N.gwen``: the agent. Its beliefs hold the shield's state between ticks and the outputs it
+  decided; each tick (the percept ``tick(0|1)`` changes) it decides with the shield's machine,
+  believes the outputs and state that the machine gives, and publishes the outputs:
+  ``+tick(T) : {B mem(State, Was, Broken)} <- shield(State, Out, Next, Now), -mem(...),
+  +mem(Next, Out, Now), publish(Out);``. The action ``shield/4`` is the shield's step at the
+  level of its atoms (``N_shield.java``), so the stop is held and released exactly as the
+  Python, C and ROS 2 forms hold and release it (tests/shield/test_gwendolen.py steps both).
+  Each output atom (a boolean output, a comparison of a numeric one: ``linear_speed <= 0.15``
+  is the belief ``linear_speed_le_0_15``) is a belief the reasoning rules read off ``mem``;
+  ``decided`` holds once the agent has decided a tick, ``assumption_broken`` once an
+  assumption of the environment (``--assume``) has been broken.
+* ``N_shield.java``: the machines (node tables, the correction of
+  :class:`fretc.shield.runtime.ShieldRuntime` with the same costs and ties), standard Java;
+  its ``main`` steps lines of 0/1 strings, which the tests compare with the Python form.
+* ``N_env.java``: the verification environment: at each perception every input atom takes a
+  value real numbers give (the machine's ``env_ok``) and the controller proposes ``push``
+  (every output atom the opposite of the fallback's, as near as one message allows: the
+  controller that always wants to move) or ``stop`` (the fallback's atoms), by AJPF's choice.
+* ``N.ail``: the AIL configuration (the agent, its builder, the environment;
+  ``ajpf.transition_every_reasoning_cycle = false``, so that AJPF's model states are the
+  ticks: a property is read where a tick's inputs and its decided outputs are both believed).
+  ``N_LABEL.ail`` per property: the environment changing only the inputs that property's
+  requirement reads and those of the requirements sharing an output with it (the others stay
+  false), which AJPF explores in minutes where every input takes hours.
+* ``N.psl``: one AJPF property per enforced requirement (:mod:`fretc.shield.agent_properties`:
+  ``immediately`` exactly, over ticks; what AJPF's LTL cannot count said in the file) and the
+  release of each stop output (``release_stopped``).
 
-**The untimed reading.** A Gwendolen agent has no clock and acts some reasoning cycles after
-it perceives, so a deadline ("within 1 second", a counter in the shield's state) and even
-"immediately" cannot be stated for AJPF: every property is the untimed reading the paper uses
-(the response eventually follows the condition), and the files say so, requirement by
-requirement. The deadlines are kept by the Python, C and ROS 2 forms, whose closed loop
-``--prove`` checks with the timing.
+``fretc ajpf DIR`` compiles the Java files against MCAPL and runs AJPF on every property
+(:mod:`fretc.shield.ajpf_run`).
 """
 
 from __future__ import annotations
 
+import itertools
 import re
 from collections.abc import Sequence
 from typing import Any
 
-from fretc.compiler import ir
-from fretc.compiler.ajpf import to_ajpf
-from fretc.fretish import ast as A
 from fretc.shield.build import Shield
+from fretc.shield.machine import Machine, evaluate
+from fretc.shield.plan import ShieldError
 
-__all__ = ["render_gwendolen", "agent_rules", "Rule"]
+__all__ = ["render_gwendolen", "AgentAtoms", "agent_atoms", "agent_name", "MAX_INPUT_ATOMS",
+           "MAX_OUTPUT_ATOMS"]
+
+#: the environment lists every input valuation: at most 2**16
+MAX_INPUT_ATOMS = 16
+#: the proposals are searched among the output valuations of a machine: at most 2**16
+MAX_OUTPUT_ATOMS = 16
 
 _TERM = re.compile(r"[a-z][A-Za-z0-9_]*\Z")
+#: the agent's own names (its beliefs, actions and percepts), never an atom's
+_RESERVED = frozenset({"mem", "decided", "assumption_broken", "tick", "proposes", "shield",
+                       "publish", "v", "s", "none", "true", "false"})
+_OP_WORDS = {"<=": "le", ">=": "ge", "!=": "ne", "<": "lt", ">": "gt", "=": "eq",
+             "+": "plus", "-": "minus", "*": "times", "/": "div"}
 
 
-class Rule:
-    """One requirement as the agent's plans: ``rid``, ``condition`` and ``response``
-    ``[(variable, value)]`` literals, ``timing`` (FRET's key), or ``why`` it is not in the
-    agent."""
-
-    def __init__(self, rid: str, condition: list[tuple[str, bool]] | None = None,
-                 response: list[tuple[str, bool]] | None = None, timing: str = "",
-                 why: str = ""):
-        self.rid, self.condition, self.response = rid, condition or [], response or []
-        self.timing, self.why = timing, why
-
-
-def _literals(e: Any) -> list[tuple[str, bool]] | None:
-    """The literals of a conjunction of boolean variables and their negations, else None."""
-    if isinstance(e, A.Var):
-        return [(e.name, True)]
-    if isinstance(e, A.Unary) and e.op == "!" and isinstance(e.operand, A.Var):
-        return [(e.operand.name, False)]
-    if isinstance(e, A.Binary) and e.op == "&":
-        a, b = _literals(e.left), _literals(e.right)
-        return None if a is None or b is None else a + b
-    return None
+def _term_of(text: str) -> str:
+    """An atom's FRET/SMV text as a Gwendolen term: operators as words, a minus sign before a
+    number ``m``, every other character not a letter or digit ``_``, a leading ``v_`` where the
+    text does not start with a lower-case letter (``(linear_speed <= 0.15)`` ->
+    ``linear_speed_le_0_15``)."""
+    t = text.strip()
+    while t.startswith("(") and t.endswith(")"):
+        t = t[1:-1].strip()
+    t = re.sub(r"(?<![A-Za-z0-9_.])-(?=\d)", "m", t)
+    for op in ("<=", ">=", "!=", "<", ">", "=", "+", "-", "*", "/"):
+        t = t.replace(f" {op} ", f"_{_OP_WORDS[op]}_")
+    t = re.sub(r"[^A-Za-z0-9_]+", "_", t).strip("_") or "atom"
+    return t if _TERM.match(t) else "v_" + t
 
 
-def agent_rules(shield: Shield, compiled: Sequence[Any]) -> list[Rule]:
-    """The enforced requirements of ``shield`` as :class:`Rule` (module docstring)."""
+class AgentAtoms:
+    """The agent's names for the shield's atoms: ``inputs`` and ``outputs`` the atoms' FRET/SMV
+    texts in the order of ``N_shield.java``'s ``INPUT_ATOMS`` and ``OUTPUT_ATOMS``; ``term``
+    text -> Gwendolen term (unique, none of the agent's own names)."""
+
+    def __init__(self, shield: Shield):
+        self.inputs = list(dict.fromkeys(a.text for m in shield.machines for a in m.inputs))
+        self.outputs = [a.text for m in shield.machines for a in m.outputs]
+        self.term: dict[str, str] = {}
+        used = set(_RESERVED)
+        for text in [*self.inputs, *dict.fromkeys(self.outputs)]:
+            base = _term_of(text)
+            name, k = base, 2
+            while name in used:
+                name, k = f"{base}_{k}", k + 1
+            used.add(name)
+            self.term[text] = name
+
+
+def agent_atoms(shield: Shield) -> AgentAtoms:
+    """The agent's names for ``shield``'s atoms (:class:`AgentAtoms`)."""
+    return AgentAtoms(shield)
+
+
+def agent_name(shield: Shield, compiled: Sequence[Any]) -> str:
+    """The agent: the component of the first enforced requirement that is a Gwendolen term,
+    else ``shield_agent``."""
     by_id = {c.id: c for c in compiled}
-    out = []
     for r in shield.requirements:
-        req = by_id[r.id].entry.requirement
-        if req.scope.kind != "null":
-            out.append(Rule(r.id, why=f"a {req.scope.kind} scope: the agent has no mode"))
-            continue
-        cond = [] if req.condition.expr is None else _literals(req.condition.expr)
-        resp = _literals(req.response)
-        names = [v for v, _ in (cond or []) + (resp or [])]
-        if cond is None or resp is None:
-            out.append(Rule(r.id, why="its condition or response is not a conjunction of "
-                                      "boolean variables (a number, a disjunction)"))
-        elif any(v not in shield.outputs for v, _ in resp):
-            out.append(Rule(r.id, why="its response reads an input"))
-        elif not all(_TERM.match(v) for v in names):
-            out.append(Rule(r.id, why="a variable that is not a Gwendolen term"))
-        elif req.timing.kind == "never" and len(resp) != 1:
-            out.append(Rule(r.id, why="'never' of a conjunction forbids a disjunction, and the "
-                                      "agent's plans make literals true"))
-        elif req.timing.kind == "never":  # never R: the agent makes R's negation hold
-            (v, val), = resp
-            out.append(Rule(r.id, cond, [(v, not val)], "never"))
-        else:
-            out.append(Rule(r.id, cond, resp, req.timing.kind or "null"))
+        c = by_id.get(r.id)
+        comp = c.entry.requirement.component if c is not None else ""
+        if comp and _TERM.match(comp) and comp not in _RESERVED:
+            return str(comp)
+    return "shield_agent"
+
+
+def _valuations(shield: Shield, atoms: AgentAtoms) -> list[int]:
+    """The input valuations the environment gives (bit ``j`` the ``j``-th input atom): those
+    whose every machine's ``env_ok`` holds (the values real numbers give the comparisons).
+
+    Raises:
+        ShieldError: more than :data:`MAX_INPUT_ATOMS` input atoms."""
+    n = len(atoms.inputs)
+    if n > MAX_INPUT_ATOMS:
+        raise ShieldError(f"the Gwendolen form's environment lists every input valuation: "
+                          f"{n} input atoms, at most {MAX_INPUT_ATOMS}")
+    index = {t: j for j, t in enumerate(atoms.inputs)}
+    out = []
+    for v in range(1 << n):
+        if all(evaluate(m.nodes, m.env_ok,
+                        [(v >> index[a.text]) & 1 for a in m.inputs]
+                        + [0] * (len(m.outputs) + len(m.init)))
+               for m in shield.machines):
+            out.append(v)
     return out
 
 
-def _plans(rules: list[Rule]) -> tuple[list[str], list[str]]:
-    """The agent's plans and initial goals: per literal of the response, a plan that acts only
-    while the literal does not hold yet (so each plan fires once per need, and the agent's
-    pending intentions stay bounded for the model checker). A condition of negated
-    literals only holds from the start, before any belief changes (the agent believes
-    nothing yet): its plans fire on a belief's removal, which never comes when the input
-    was never perceived, so an initial goal acts on it too."""
-    plans, goals = [], []
-    for rule in rules:
-        if rule.why:
-            continue
-        for v, val in rule.response:
-            act = f"{'set' if val else 'clear'}_{v}, {'+' if val else '-'}{v}"
-            need = f"{'~B' if val else 'B'} {v}"
-            if not rule.condition:
-                goal = f"keep_{rule.rid.lower()}_{v} [perform]"
-                goals.append(goal)
-                plans.append(f"+!{goal} : {{{need}}} <- {act};")
-                continue
-            for k, (c, cval) in enumerate(rule.condition):
-                others = [(w, b) for j, (w, b) in enumerate(rule.condition) if j != k]
-                guard = ", ".join([("B " if b else "~B ") + w for w, b in others] + [need])
-                plans.append(f"{'+' if cval else '-'}{c}: {{{guard}}} <- {act};")
-            if not any(cval for _c, cval in rule.condition):  # (holds at the start)
-                goal = f"start_{rule.rid.lower()}_{v} [perform]"
-                goals.append(goal)
-                guard = ", ".join([f"~B {c}" for c, _b in rule.condition] + [need])
-                plans.append(f"+!{goal} : {{{guard}}} <- {act};")
-    return plans, goals
+def _consistent(m: Machine) -> list[tuple[int, ...]]:
+    """The output valuations of machine ``m`` that one message gives (its ``ctl_ok``).
+
+    Raises:
+        ShieldError: more than :data:`MAX_OUTPUT_ATOMS` output atoms."""
+    n = len(m.outputs)
+    if n > MAX_OUTPUT_ATOMS:
+        raise ShieldError(f"the Gwendolen form's environment searches the controller's "
+                          f"proposals among the output valuations: {n} output atoms in one "
+                          f"component, at most {MAX_OUTPUT_ATOMS}")
+    pad_in, pad_bits = [0] * len(m.inputs), [0] * len(m.init)
+    return [v for v in itertools.product((0, 1), repeat=n)
+            if evaluate(m.nodes, m.ctl_ok, pad_in + list(v) + pad_bits)]
+
+
+def proposals(shield: Shield) -> list[tuple[str, list[int], str]]:
+    """The controller's proposals in the environment: ``(name, output atoms, what)``:
+    ``push`` (per machine, the valuation one message gives nearest every atom the opposite
+    of the fallback's, ties to the first in binary order: the controller that always wants to
+    move on) and ``stop`` (the fallback's atoms) when the shield has a fallback."""
+    push: list[int] = []
+    stop: list[int] | None = [] if shield.fallback is not None else None
+    for k, m in enumerate(shield.machines):
+        want = ([1 - b for b in shield.fallback["atoms"][k]] if shield.fallback is not None
+                else [1] * len(m.outputs))
+        cands = _consistent(m) or [tuple(want)]
+        push += list(min(cands, key=lambda v: sum(a != b for a, b in zip(v, want))))
+        if stop is not None and shield.fallback is not None:
+            stop += list(shield.fallback["atoms"][k])
+    out = [("push", push, "every output atom the opposite of the fallback's, as near as one "
+                          "message allows")]
+    if stop is not None and stop != push:
+        out.append(("stop", stop, "the fallback's outputs"))
+    return out
+
+
+def _machine_ctx(shield: Shield, atoms: AgentAtoms) -> list[dict[str, Any]]:
+    """Each machine's data for ``gwendolen_shield.java.j2``."""
+    index = {t: j for j, t in enumerate(atoms.inputs)}
+    out, o_start, b_start = [], 0, 0
+    p = len(shield.preferences)
+    for k, m in enumerate(shield.machines):
+        weights = sorted(shield.weights(k).items())
+        out.append({
+            "inputs": [index[a.text] for a in m.inputs], "out_start": o_start,
+            "n_out": len(m.outputs), "bit_start": b_start, "n_bits": len(m.init),
+            "safe": m.safe, "nodes": ";".join(f"{v},{lo},{hi}" for v, lo, hi in m.nodes),
+            "next": list(m.next), "assumed": list(m.assumed),
+            "w_atom": [j for j, _w in weights], "w_want": [int(w[0]) for _j, w in weights],
+            "w_weight": [w[1] for _j, w in weights], "big": 1 << p,
+            "fallback": (list(shield.fallback["atoms"][k]) if shield.fallback is not None
+                         else None)})
+        o_start += len(m.outputs)
+        b_start += len(m.init)
+    return out
+
+
+def _bits_term(functor: str, bits: Sequence[int]) -> str:
+    return f"{functor}({','.join(str(int(b)) for b in bits)})" if bits else functor
+
+
+def _agent(shield: Shield, atoms: AgentAtoms, agent: str, base: str, notes: list[str]) -> str:
+    """The agent's text (module docstring)."""
+    n = len(atoms.outputs)
+    init = [int(b) for m in shield.machines for b in m.init]
+    rules = []
+    for j, text in enumerate(atoms.outputs):
+        pattern = ",".join("1" if k == j else "_" for k in range(n))
+        rules.append(f"{atoms.term[text]} :- mem(_, v({pattern}), _);")
+    rules.append(f"decided :- mem(_, v({','.join('_' for _k in range(n))}), _);")
+    rules.append("assumption_broken :- mem(_, _, 1);")
+    head = [f"// {base}.gwen: the Safety System {shield.name} as a Gwendolen agent, generated by "
+            "fretc shield.",
+            "// Each tick it decides with the shield's machine (its action shield/4, "
+            f"{base}_shield.java),",
+            "// believes the outputs and the state the machine gives, and publishes the outputs: "
+            "the stop",
+            "// is held and released as the Python, C and ROS 2 forms hold and release it.",
+            "// Percepts: " + ", ".join(atoms.term[t] for t in atoms.inputs) + "; the "
+            "controller's proposal as proposes(ATOM).",
+            "// Beliefs: " + ", ".join(f"{atoms.term[t]} ({t})" for t in atoms.outputs) + ".",
+            *[f"// {line}" for line in notes]]
+    return "\n".join([
+        *head, "GWENDOLEN", f":name: {agent}", "", ":Initial Beliefs:",
+        f"mem({_bits_term('s', init)}, none, 0)", "", ":Reasoning Rules:", *rules, "",
+        ":Initial Goals:", "", ":Plans:",
+        "+tick(Tick) : {B mem(State, Was, Broken)} <- shield(State, Out, Next, Now), "
+        "-mem(State, Was, Broken), +mem(Next, Out, Now), publish(Out);", ""])
+
+
+def _ail(base: str, settings: Sequence[str] = ()) -> str:
+    return "\n".join([f"mas.file = {base}.gwen", "mas.builder = gwendolen.GwendolenMASBuilder",
+                      f"env = {base}_env",
+                      "# AJPF's model states are the ticks (the choice of each tick's percepts)",
+                      "ajpf.transition_every_reasoning_cycle = false", *settings,
+                      "log.warning = ajpf.MCAPLAgent", "log.format = brief", ""])
 
 
 def render_gwendolen(shield: Shield, compiled: Sequence[Any], base: str) -> dict[str, str]:
-    """``{file name: text}`` of the form (module docstring); ``base`` the file stem."""
-    rules = agent_rules(shield, compiled)
-    by_id = {c.id: c for c in compiled}
-    agent = next((by_id[r.id].entry.requirement.component for r in shield.requirements
-                  if _TERM.match(by_id[r.id].entry.requirement.component or "")), "shield_agent")
-    plans, goals = _plans(rules)
-    inputs = [v for v in shield.inputs if v in shield.read and v not in shield.numbers
-              and _TERM.match(v)]
-    head = [f"// {base}.gwen: the Safety System {shield.name} as a Gwendolen agent, generated by",
-            "// fretc shield (Safe-ROS's SIF). The untimed reading of each requirement: the agent",
-            "// acts on what it perceives some reasoning cycles later; deadlines are kept by the",
-            "// Python, C and ROS 2 forms of the same shield."]
-    for rule in rules:
-        if rule.why:
-            head.append(f"// {rule.rid}: not in the agent ({rule.why}); enforced by the other "
-                        "forms")
-        else:
-            head.append(f"// {rule.rid}: untimed reading of '{rule.timing}': the response"
-                        + ("'s negation" if rule.timing == "never" else "")
-                        + " eventually follows the condition")
-    gwen = "\n".join(head + ["GWENDOLEN", f":name: {agent}", "", ":Initial Beliefs:", "",
-                             ":Initial Goals:", *goals, "", ":Plans:", *plans]) + "\n"
-    return {f"{base}.gwen": gwen,
-            f"{base}_env.java": _environment(base, inputs),
-            f"{base}.ail": (f"mas.file = {base}.gwen\nmas.builder = gwendolen.GwendolenMASBuilder\n"
-                            f"env = {base}_env\n\nlog.warning = ajpf.MCAPLAgent\n"
-                            "log.format = brief\n"),
-            f"{base}.psl": _psl(rules, agent)}
+    """``{file name: text}`` of the form (module docstring); ``base`` the file stem.
+
+    Raises:
+        ShieldError: more input or output atoms than the environment lists
+            (:data:`MAX_INPUT_ATOMS`, :data:`MAX_OUTPUT_ATOMS`)."""
+    from fretc.compiler.codegen import _env  # lazy: Jinja2 only when the form is written
+    from fretc.shield.agent_properties import agent_properties
+
+    atoms = agent_atoms(shield)
+    agent = agent_name(shield, compiled)
+    valuations = _valuations(shield, atoms)
+    props = proposals(shield)
+    psl, scoped = agent_properties(shield, compiled, atoms, agent, props, valuations)
+    env = _env()
+    ctx = {"p": base, "name": shield.name, "agent": agent, "digest": shield.digest,
+           "requirements": [r.id for r in shield.requirements],
+           "input_atoms": [atoms.term[t] for t in atoms.inputs],
+           "output_atoms": [atoms.term[t] for t in atoms.outputs],
+           "init": [int(b) for m in shield.machines for b in m.init],
+           "machines": _machine_ctx(shield, atoms), "valuations": valuations,
+           "valuation_texts": [_valuation_text(v, atoms) for v in valuations],
+           "proposals": props}
+    files = {f"{base}.gwen": _agent(shield, atoms, agent, base, _notes(shield)),
+             f"{base}_shield.java": env.get_template("gwendolen_shield.java.j2").render(**ctx),
+             f"{base}_env.java": env.get_template("gwendolen_env.java.j2").render(**ctx),
+             f"{base}.ail": _ail(base), f"{base}.psl": psl}
+    for label, inputs in scoped.items():
+        files[f"{base}_{label}.ail"] = _ail(base, [
+            f"# {label}: the environment changes only {', '.join(inputs) or 'no input'} "
+            "(the others stay false)",
+            f"{base}_env.inputs = {','.join(inputs)}"])
+    return files
 
 
-def _psl(rules: list[Rule], agent: str) -> str:
-    """One AJPF property per requirement in the agent (module docstring)."""
-    lines = ["# AJPF properties of the generated agent: the untimed reading of each enforced",
-             "# requirement (the response eventually follows the condition). Lines starting",
-             "# with # are comments."]
-    for rule in rules:
-        if rule.why:
-            lines.append(f"# {rule.rid}: not in the agent ({rule.why})")
-            continue
-        cond = ir.and_all(*(ir.ap(v) if b else ir.not_(ir.ap(v)) for v, b in rule.condition))
-        resp = ir.and_all(*(ir.ap(v) if b else ir.not_(ir.ap(v)) for v, b in rule.response))
-        phi = ir.G(ir.implies(cond, ir.F(resp))) if rule.condition else ir.F(resp)
-        lines.append(f"# {rule.rid}: untimed reading of its '{rule.timing}' timing"
-                     + (" (the response's negation)" if rule.timing == "never" else ""))
-        lines.append(f"{re.sub(r'[^A-Za-z0-9_]', '_', rule.rid)}: {to_ajpf(phi, agent, {})}")
-    return "\n".join(lines) + "\n"
+def _valuation_text(v: int, atoms: AgentAtoms) -> str:
+    on = [atoms.term[t] for j, t in enumerate(atoms.inputs) if (v >> j) & 1]
+    return "+".join(on) or "none"
 
 
-def _environment(base: str, inputs: list[str]) -> str:
-    """The verification environment (module docstring)."""
-    percepts = "\n".join(
-        f"        if (random_bool_generator.nextBoolean()) {{\n"
-        f"            percepts.add(new Predicate(\"{v}\"));\n        }}" for v in inputs)
-    return f"""// {base}_env.java: the AJPF verification environment of the generated agent (fretc
-// shield): at each perception every input variable ({", ".join(inputs) or "none"}) is
-// perceived or not by AJPF's boolean choice, so every input sequence is explored.
-import java.util.HashSet;
-import java.util.Set;
-
-import ail.syntax.Message;
-import ail.syntax.Predicate;
-import gwendolen.mas.VerificationofAutonomousSystemsEnvironment;
-
-public class {base}_env extends VerificationofAutonomousSystemsEnvironment {{
-
-    @Override
-    public Set<Predicate> generate_percepts() {{
-        Set<Predicate> percepts = new HashSet<Predicate>();
-{percepts}
-        return percepts;
-    }}
-
-    @Override
-    public Set<Message> generate_messages() {{
-        return new HashSet<Message>();
-    }}
-}}
-"""
+def _notes(shield: Shield) -> list[str]:
+    """What the agent leaves to the other forms: the numbers behind the comparisons, the
+    requirements only monitored."""
+    out = ["It decides the truth of every output atom; the numbers that give them are the "
+           "hosts' (the Python, C and ROS 2 forms)."]
+    for rid, why in shield.monitored.items():
+        out.append(f"{rid}: monitored only, not in the agent ({why}).")
+    return out
