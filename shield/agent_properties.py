@@ -244,9 +244,7 @@ def _releases(shield: Shield, compiled: Sequence[Any], atoms: Any, agent: str,
         return []
     push = props[0][1]
     quiet = " & ".join([f"~B({agent},{atoms.term[t]})" for t in atoms.inputs]
-                       + [(f"B({agent},proposes({atoms.term[t]}))" if b
-                           else f"~B({agent},proposes({atoms.term[t]}))")
-                          for t, b in zip(atoms.outputs, push)])
+                       + [f"B({agent},proposal({props[0][0]}))"])
     out: list[str] = []
     start = 0
     for k, m in enumerate(shield.machines):

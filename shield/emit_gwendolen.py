@@ -23,7 +23,8 @@ enforced requirement, Safe-ROS's ``agilex_agent``):
 * ``N_env.java``: the verification environment: at each perception every input atom takes a
   value real numbers give (the machine's ``env_ok``) and the controller proposes ``push``
   (every output atom the opposite of the fallback's, as near as one message allows: the
-  controller that always wants to move) or ``stop`` (the fallback's atoms), by AJPF's choice.
+  controller that always wants to move) or ``stop`` (the fallback's atoms), by AJPF's choice;
+  the agent perceives the input atoms that hold and the proposal's name (``proposal(push)``).
 * ``N.ail``: the AIL configuration (the agent, its builder, the environment;
   ``ajpf.transition_every_reasoning_cycle = false``, so that AJPF's model states are the
   ticks: a property is read where a tick's inputs and its decided outputs are both believed).
@@ -59,7 +60,7 @@ MAX_OUTPUT_ATOMS = 16
 
 _TERM = re.compile(r"[a-z][A-Za-z0-9_]*\Z")
 #: the agent's own names (its beliefs, actions and percepts), never an atom's
-_RESERVED = frozenset({"mem", "decided", "assumption_broken", "tick", "proposes", "shield",
+_RESERVED = frozenset({"mem", "decided", "assumption_broken", "tick", "proposal", "shield",
                        "publish", "v", "s", "none", "true", "false"})
 _OP_WORDS = {"<=": "le", ">=": "ge", "!=": "ne", "<": "lt", ">": "gt", "=": "eq",
              "+": "plus", "-": "minus", "*": "times", "/": "div"}
@@ -216,7 +217,7 @@ def _agent(shield: Shield, atoms: AgentAtoms, agent: str, base: str, notes: list
             "the stop",
             "// is held and released as the Python, C and ROS 2 forms hold and release it.",
             "// Percepts: " + ", ".join(atoms.term[t] for t in atoms.inputs) + "; the "
-            "controller's proposal as proposes(ATOM).",
+            "controller's proposal as proposal(NAME).",
             "// Beliefs: " + ", ".join(f"{atoms.term[t]} ({t})" for t in atoms.outputs) + ".",
             *[f"// {line}" for line in notes]]
     return "\n".join([

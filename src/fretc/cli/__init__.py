@@ -138,6 +138,7 @@ _OPTIONAL = {"audit": ("audit", "audit_cmd"), "check": ("check", "check_cmd"),
              "testgen": ("testgen", "testgen_cmd"), "testrun": ("testrun", "testrun_cmd"),
              "shield": ("shield", "shield_cmd"),
              "shield-replay": ("shield_replay", "shield_replay_cmd"),
+             "ajpf": ("ajpf", "ajpf_cmd"),
              "replay": ("watch", "replay_cmd")}
 
 
