@@ -1,4 +1,6 @@
-"""The gaps of a watched run, carried by its recording (``fretc watch --record``).
+"""The gaps of a watched run, carried by its recording (``fretc watch --record``), and the
+damage of a recording a shield was replayed over, carried by the shielded recording
+(``fretc shield-replay``: :data:`REPLAY_LIBRARY`).
 
 A watch knows what its recording cannot show: the connection was lost for a while, a
 publisher left (its topic unadvertised) and came back, or left for good while the run went
@@ -11,6 +13,11 @@ every topic), and :class:`fretc.logs.McapSource` reads them back as gaps of the 
 ``fretc audit`` of the recording gives the watch's verdicts (../shared/DESIGN.md, "Damage is
 a gap"). A recording whose record cannot be read is a data problem of the log, never a
 crash, and its gaps are not used.
+
+A shielded recording (:mod:`fretc.shield.replay`) made from a damaged recording holds the
+intact span alone, and carries the damage in the same record: one gap from the damage's log
+time to the end of the run (:data:`RUN_END`, every topic, its cause the reader's problem
+kind), so that its audit, then or later, is partial there and judges no tick past it.
 """
 
 from __future__ import annotations
@@ -22,7 +29,7 @@ from fretc.common.problems import DataProblem
 from fretc.logs.base import Gap
 
 __all__ = ["GAPS_METADATA", "LEFT_FOR_GOOD", "PUBLISHER_ABSENT", "SILENT_CAUSES", "RUN_END",
-           "WATCH_LIBRARY", "gaps_json", "parse_gaps", "read_recorded_gaps", "first_start",
+           "WATCH_LIBRARY", "REPLAY_LIBRARY", "GAP_LIBRARIES", "gaps_json", "parse_gaps", "read_recorded_gaps", "first_start",
            "gap_problems", "losses"]
 
 #: The cause of the gap of a topic whose publisher left the run for good while the run went
@@ -46,6 +53,15 @@ RUN_END = 2**63 - 1
 GAPS_METADATA = "fretc.watch_gaps"
 #: The Header library of a watch's recording (only such files carry the record)
 WATCH_LIBRARY = "fretc watch"
+#: The Header library of a shielded recording (``fretc shield-replay``)
+REPLAY_LIBRARY = "fretc shield-replay"
+#: The Header libraries whose files may carry the record, and what lost their messages (in
+#: the data problem of each gap)
+GAP_LIBRARIES = {WATCH_LIBRARY: "the watch that recorded this log lost messages here (its "
+                                "gaps are recorded in the log)",
+                 REPLAY_LIBRARY: "the recording this shielded run was replayed from is "
+                                 "damaged here: nothing from here on was replayed (the damage "
+                                 "is recorded in the log)"}
 #: Gaps read from one record at most (a watch keeps fewer problems than this)
 MAX_GAPS = 100_000
 _INT64 = (-(2**63), 2**63 - 1)
@@ -127,10 +143,11 @@ def first_start(gaps: Sequence[Gap]) -> int | None:
     return min(starts) if starts else None
 
 
-def gap_problems(gaps: Sequence[Gap]) -> list[DataProblem]:
+def gap_problems(gaps: Sequence[Gap], library: str = WATCH_LIBRARY) -> list[DataProblem]:
     """One data problem per recorded gap in which messages were lost (:func:`losses`: its
-    cause as the kind, its topics, start and end), as the watch reported them; a silence
-    (a publisher away) is no data problem."""
+    cause as the kind, its topics, start and end), as the watch (or the replay: ``library``,
+    a key of :data:`GAP_LIBRARIES`) reported them; a silence (a publisher away) is no data
+    problem."""
+    why = GAP_LIBRARIES.get(library, GAP_LIBRARIES[WATCH_LIBRARY])
     return [DataProblem(g.cause, ", ".join(sorted(g.topics)) if g.topics else None, g.start,
-                        "the watch that recorded this log lost messages here (its gaps are "
-                        "recorded in the log)", g.end) for g in losses(gaps)]
+                        why, g.end) for g in losses(gaps)]

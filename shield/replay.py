@@ -29,6 +29,16 @@ reader, :func:`fretc.logs.open_log`, and the same bindings), :func:`replay_log`:
   proposal that could not be read (replaced), ticks with nothing published (no fallback),
   and the assumptions of the environment that broke.
 
+A damaged recording (../shared/DESIGN.md, "Damage is a gap"; a cut, a chunk or record that
+does not read, a rosbag2 storage that ends early) is replayed over its intact span, the log
+times before the damage as the audit's reader finds it (:attr:`fretc.logs.LogSource.
+intact_end`, and where the recorded messages could be copied up to): the shielded recording
+holds the recorded messages and the shield's ticks of that span alone, and carries the
+damage (:func:`fretc.shield.replay_records.write_shielded`'s ``gaps``), so its audit is
+partial there and judges no tick past it. Where the damage is is known only once the
+recording was read, so a damaged recording is read twice: once to find it, once to write
+the span before it.
+
 The ROS 2 node the shield generates ticks on its ``[shield] tick`` topic and its timer
 instead, and meets each deadline early by its margin: a replay is the shield on the audit's
 clock, the one its proof is about.
@@ -47,7 +57,7 @@ from typing import Any
 
 from fretc.common.errors import FretcError
 from fretc.shield.messages import MessageShield, ShieldInputError, default_message, proposals_of
-from fretc.shield.replay_records import (Channel, Record, recorded_records, recorded_topic,
+from fretc.shield.replay_records import (Channel, Record, RecordedLog, recorded_topic,
                                          write_shielded)
 from fretc.signals.bindings.spec import Bindings, grid_end, grid_start
 
@@ -152,7 +162,9 @@ class ReplayResult:
     no fallback), ``broken`` assumption -> the log time it broke, ``published`` messages
     per output topic, ``renamed`` recorded topic -> the topic its messages are kept on,
     ``written_counts`` messages written per topic, ``problems`` the log's data problems
-    (text)."""
+    (text), ``damage`` the recording's damage (None: none; else ``damage_time_ns``, the
+    exclusive end of the span replayed, None when the damage lost no message, and
+    ``problems``, the readers' words)."""
 
     log: str
     written: str
@@ -170,6 +182,7 @@ class ReplayResult:
     renamed: dict[str, str] = field(default_factory=dict)
     written_counts: dict[str, int] = field(default_factory=dict)
     problems: list[str] = field(default_factory=list)
+    damage: dict[str, Any] | None = None
 
     def as_json(self) -> dict[str, Any]:
         """The result as JSON data (log times in ns)."""
@@ -183,7 +196,8 @@ class ReplayResult:
                 "nothing_published": self.silent.as_json(),
                 "assumptions_broken": dict(self.broken),
                 "published": dict(self.published), "recorded_kept_as": dict(self.renamed),
-                "written": dict(self.written_counts), "log_problems": list(self.problems)}
+                "written": dict(self.written_counts), "log_problems": list(self.problems),
+                "damage": None if self.damage is None else dict(self.damage)}
 
 
 def shielded_name(log: str | os.PathLike[str]) -> str:
@@ -281,9 +295,11 @@ def _needed(folder: ShieldFolder, bindings: Bindings, shield: MessageShield,
         needed.add(bindings.tick.topic)
     missing = sorted(t for t in needed if t not in recorded)
     if missing:
+        damaged = (f", before the damage ({source.problems[0]})"
+                   if source.partial and source.problems else "")
         raise ReplayError(f"{log}: no message of {', '.join(missing)}, which the shield reads "
                           f"({folder.bindings_file}: the inputs' bindings, [shield] proposals, "
-                          "the tick topic)")
+                          f"the tick topic){damaged}")
     types = _output_types(folder.bindings_file, bindings)
     for corrected, proposal in shield.proposals.items():
         if corrected not in types and proposal in recorded:
@@ -299,11 +315,12 @@ def _needed(folder: ShieldFolder, bindings: Bindings, shield: MessageShield,
     return needed, {t: types[t] for t in sorted(outputs)}
 
 
-def _ticks(source: Any, needed: set[str], bindings: Bindings, log: str
-           ) -> Iterator[tuple[int | None, Any]]:
+def _ticks(source: Any, needed: set[str], bindings: Bindings, log: str,
+           until: int | None = None) -> Iterator[tuple[int | None, Any]]:
     """The messages of ``needed`` and the ticks between them, in order: ``(None, message)``
     for a message, ``(t, None)`` for a tick at log time ``t`` (ns), after every message of
-    log time ``t`` or earlier (module docstring).
+    log time ``t`` or earlier (module docstring); none of log time ``until`` or later (the
+    intact span of a damaged recording).
 
     Raises:
         ReplayError: more than :data:`MAX_REPLAY_TICKS` ticks."""
@@ -320,6 +337,8 @@ def _ticks(source: Any, needed: set[str], bindings: Bindings, log: str
     last: int | None = None
     for m in source.messages(needed):
         t = int(m.log_time)
+        if until is not None and t >= until:
+            break
         if period is not None:
             if next_grid is None:
                 next_grid = grid_start(t, period)
@@ -335,10 +354,10 @@ def _ticks(source: Any, needed: set[str], bindings: Bindings, log: str
         last = t
     if period is not None and next_grid is not None and last is not None:
         end = grid_end(max(last, source.end_time or last), period)
-        while next_grid <= end:
+        while next_grid <= end and (until is None or next_grid < until):
             yield next_grid, None
             next_grid += period
-    while pending:
+    while pending and (until is None or pending[0] < until):
         yield pending.popleft(), None
 
 
@@ -399,34 +418,81 @@ def _shielded(shield: MessageShield, outputs: _Outputs,
 def replay_log(folder: ShieldFolder, log: str | os.PathLike[str], out: str | os.PathLike[str],
                msg_path: tuple[str, ...] = ()) -> ReplayResult:
     """Run the shield of ``folder`` over the recording ``log`` and write the shielded
-    recording ``out`` (module docstring).
+    recording ``out`` (module docstring); a damaged recording over its intact span, the
+    damage in ``result.damage`` and in the written file.
 
     Raises:
         ReplayError: an input the replay cannot take (named: the folder, the log, the topic,
-            the log time). FretcError: the log or the binding file cannot be read (the
-            readers' own errors). OutputError: ``out`` cannot be written."""
+            the log time), or a damaged recording of which nothing before the damage could
+            be read (no file written). FretcError: the log or the binding file cannot be read
+            (the readers' own errors). OutputError: ``out`` cannot be written."""
     from fretc.logs import open_log
     from fretc.signals.bindings.files import load_bindings
 
     log = os.fspath(log)
     bindings = load_bindings(folder.bindings_file)
+    source = open_log(log, msg_path=msg_path or bindings.msg_path)
+    recorded = RecordedLog(log, source.kind)
+    # (a watch's recording carries its gaps: the shielded recording carries them on)
+    carried = list(getattr(source, "recorded_gaps", []))
+    result = _replay_span(folder, bindings, source, recorded, log, out, None, carried)
+    end, gaps, words = _damage(source, recorded)
+    if not source.partial and recorded.stopped is None:
+        return result
+    if end is not None:  # (the span before the damage alone, written again)
+        carried = [g for g in carried if g.start is None or g.start < end]
+        result = _replay_span(folder, bindings, source, recorded, log, out, end,
+                              carried + gaps)
+        if not result.written_counts:
+            Path(out).unlink(missing_ok=True)
+            raise ReplayError(f"{log}: damaged before any message could be read "
+                              f"({'; '.join(words) or 'no message read'}): nothing to replay "
+                              "(the shield's state after the damage depends on what was "
+                              "lost; fretc audit judges the log after a gap)")
+    result.damage = {"damage_time_ns": end, "problems": words}
+    return result
+
+
+def _damage(source: Any, recorded: RecordedLog) -> tuple[int | None, list[Any], list[str]]:
+    """Where the intact span of a read recording ends (exclusive, ns; None when nothing was
+    lost: read to its end), the gap the shielded recording carries from there to the end of
+    the run, and the readers' words (the audit reader's problems, then the copying
+    reader's)."""
+    from fretc.logs.base import Gap
+    from fretc.logs.recorded_gaps import RUN_END
+
+    ends = [e for e in (source.intact_end, recorded.intact_end) if e is not None]
+    words = [str(p) for p in source.problems[:3]] if source.partial else []
+    if recorded.stopped is not None and recorded.stopped not in words:
+        words.append(recorded.stopped)
+    if not ends:
+        return None, [], words
+    end = min(ends)
+    cause = next((g.cause for g in source.gaps if g.cause), "") or "truncated"
+    return end, [Gap(end, RUN_END, None, cause)], words
+
+
+def _replay_span(folder: ShieldFolder, bindings: Bindings, source: Any, recorded: RecordedLog,
+                 log: str, out: str | os.PathLike[str], until: int | None,
+                 gaps: list[Any]) -> ReplayResult:
+    """One replay over ``source``'s messages before ``until`` (ns; None: all), written to
+    ``out`` with ``gaps`` (:func:`replay_log`)."""
     shield = MessageShield(folder.shield_class(), bindings, proposals_of(folder.bindings_file),
                            lambda topic: outputs.make(topic))
-    source = open_log(log, msg_path=msg_path or bindings.msg_path)
     needed, types = _needed(folder, bindings, shield, source, log)
     outputs = _Outputs(bindings, types, str(folder.bindings_file))
     result = ReplayResult(log=log, written=os.fspath(out))
-    recorded = set(source.topics())
-    result.renamed = {t: recorded_topic(t) for t in sorted(set(types) & recorded)}
-    taken = sorted(t for t in result.renamed.values() if t in recorded)
+    on_log = set(source.topics())
+    result.renamed = {t: recorded_topic(t) for t in sorted(set(types) & on_log)}
+    taken = sorted(t for t in result.renamed.values() if t in on_log)
     if taken:
         raise ReplayError(f"{log}: {', '.join(taken)} is recorded already: the recorded "
                           "messages of the topics the shield publishes on cannot be kept "
                           "there")
     # (both streams read as the file is written: memory does not grow with the log)
     result.written_counts = write_shielded(
-        out, recorded_records(log, source.kind),
-        _shielded(shield, outputs, _ticks(source, needed, bindings, log), result),
-        result.renamed)
+        out, recorded.records(until),
+        _shielded(shield, outputs, _ticks(source, needed, bindings, log, until), result),
+        result.renamed, gaps)
     result.problems = [str(p) for p in source.problems]
     return result

@@ -5,7 +5,10 @@ for ROS 1 bags and rosbag2 folders), and the MCAP file that holds them with the 
 messages added (``mcap``'s writer; MCAP's well-known profiles, mcap.dev/spec/registry).
 
 * **MCAP**: every message record with its channel (topic, message encoding, metadata) and
-  schema (name, encoding, data) as the file holds them; the ids are the writer's.
+  schema (name, encoding, data) as the file holds them; the ids are the writer's. The records
+  are read by fretc's own MCAP reader (:class:`fretc.logs.mcap.source.McapSource`, the
+  audit's: a damaged chunk or record is a gap, a cut ends the pass) with the messages' bytes
+  kept instead of decoded, so that the damage found is the audit's.
 * **ROS 1 bag**: each connection a channel of message encoding ``ros1`` with its
   ``ros1msg`` schema (``pkg/Type`` and the connection's full definition) and the
   ``md5sum``, ``callerid`` and ``latching`` metadata, as ``rosbag``'s conversion to MCAP
@@ -18,21 +21,28 @@ A recorded topic that the shield publishes on (the robot's own Safety System's o
 ``/cmd_vel_filtered`` in a Safe-ROS recording) keeps its messages unchanged on a channel of
 the topic :func:`recorded_topic` names, so the shield's messages are the only ones of its
 topics and the audit of the shielded recording judges them alone.
+
+**Damage** (../shared/DESIGN.md, "Damage is a gap"): :class:`RecordedLog` reads as far as
+the recording can be read and says where its intact span ends (``intact_end``, exclusive,
+ns; the reader's words in ``stopped``); :func:`write_shielded` given ``gaps`` records them
+in the shielded recording (:mod:`fretc.logs.recorded_gaps`), where its audit reads them.
 """
 
 from __future__ import annotations
 
 import heapq
 import os
-from collections.abc import Iterable, Iterator
+from collections.abc import Iterable, Iterator, Sequence
 from pathlib import Path
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 from fretc.common.errors import FretcError
 from fretc.common.outputs import open_output
+from fretc.logs.base import Gap
+from fretc.logs.recorded_gaps import GAPS_METADATA, REPLAY_LIBRARY, gaps_json
 
-__all__ = ["Record", "Channel", "recorded_records", "recorded_topic", "write_shielded",
-           "RECORDED_PREFIX"]
+__all__ = ["Record", "Channel", "RecordedLog", "recorded_records", "recorded_topic",
+           "write_shielded", "RECORDED_PREFIX"]
 
 #: the prefix of the topic a recorded message of a topic the shield publishes on is kept on
 RECORDED_PREFIX = "/recorded"
@@ -70,49 +80,99 @@ def recorded_topic(topic: str) -> str:
     return RECORDED_PREFIX + (topic if topic.startswith("/") else "/" + topic)
 
 
+class RecordedLog:
+    """The recorded messages of ``path`` (``kind`` as :func:`fretc.logs.open_log` names it:
+    ``mcap``, ``bag`` or ``rosbag2``) as they were (module docstring), read as far as they
+    can be.
+
+    Attributes:
+        intact_end: after a pass of :meth:`records`, the exclusive log-time bound (ns) of the
+            span read completely (as :attr:`fretc.logs.LogSource.intact_end`), or None when
+            the recording was read to its end without losing a message.
+        stopped: the reader's words on the damage (None when there was none).
+    """
+
+    def __init__(self, path: str | os.PathLike[str], kind: str) -> None:
+        self.path = os.fspath(path)
+        self.kind = kind
+        self.intact_end: int | None = None
+        self.stopped: str | None = None
+
+    def records(self, until: int | None = None) -> Iterator[Record]:
+        """The messages in log-time order, those of log time ``until`` (ns) or later left
+        out.
+
+        Raises:
+            ReplayLogError: another kind of log (named with the log)."""
+        self.intact_end, self.stopped = None, None
+        if self.kind == "mcap":
+            yield from self._mcap(until)
+            return
+        if self.kind not in ("bag", "rosbag2"):
+            raise ReplayLogError(f"{self.path}: a {self.kind} log holds no ROS messages to "
+                                 "replay a shield over (MCAP, ROS 1 bags and rosbag2 "
+                                 "folders only)")
+        last: int | None = None
+        try:
+            for r in (_bag_records if self.kind == "bag" else _rosbag2_records)(self.path):
+                if until is not None and r.log_time >= until:
+                    return
+                last = r.log_time
+                yield r
+        except Exception as exc:  # (the library's own error, whatever it is: the log's damage)
+            self.intact_end = -(2**63) if last is None else last
+            self.stopped = (f"reading stopped after log time {last} ns: "
+                            f"{type(exc).__name__}: {exc}")
+
+    def _mcap(self, until: int | None) -> Iterator[Record]:
+        source = _raw_mcap(self.path)
+        for m in source.messages(None):
+            if until is not None and m.log_time >= until:
+                break
+            yield m.data
+        self.intact_end = source.intact_end
+        if source.partial:
+            self.stopped = "; ".join(str(p) for p in source.problems[:3])
+
+
 def recorded_records(path: str | os.PathLike[str], kind: str) -> Iterator[Record]:
-    """The messages of the recording ``path`` (``kind`` as :func:`fretc.logs.open_log`
-    names it: ``mcap``, ``bag`` or ``rosbag2``) as they were, in log-time order (module
-    docstring).
+    """The messages of the recording ``path`` as they were, in log-time order, as far as
+    they can be read (:class:`RecordedLog`).
 
     Raises:
-        ReplayLogError: another kind of log, or records the format's library cannot read
-            (named with the log)."""
-    try:
-        if kind == "mcap":
-            yield from _mcap_records(path)
-        elif kind == "bag":
-            yield from _bag_records(path)
-        elif kind == "rosbag2":
-            yield from _rosbag2_records(path)
-        else:
-            raise ReplayLogError(f"{os.fspath(path)}: a {kind} log holds no ROS messages to "
-                                 "replay a shield over (MCAP, ROS 1 bags and rosbag2 folders "
-                                 "only)")
-    except ReplayLogError:
-        raise
-    except Exception as exc:  # (the library's own error, whatever it is: the log's damage)
-        raise ReplayLogError(f"{os.fspath(path)}: its records cannot be copied as they were "
-                             f"({type(exc).__name__}: {exc}): a damaged log is audited by "
-                             "fretc audit, not replayed") from None
+        ReplayLogError: another kind of log than MCAP, ROS 1 bag or rosbag2."""
+    return RecordedLog(path, kind).records()
 
 
-def _mcap_records(path: str | os.PathLike[str]) -> Iterator[Record]:
-    from mcap.reader import make_reader
+def _raw_mcap(path: str) -> Any:
+    """fretc's MCAP reader over ``path`` delivering each message as a :class:`Record` (its
+    bytes, channel and schema) instead of decoding it.
 
-    channels: dict[int, Channel] = {}
-    with open(path, "rb") as f:
-        reader = make_reader(f)
-        for schema, channel, message in reader.iter_messages(log_time_order=True):
-            ch = channels.get(channel.id)
+    Raises:
+        LogError: not an MCAP file (named)."""
+    from fretc.logs.base import Message
+    from fretc.logs.mcap.source import McapSource
+
+    class _Raw(McapSource):
+        def __init__(self, path: str) -> None:
+            super().__init__(path)
+            self._kept: dict[int, Channel] = {}
+
+        def _deliver(self, channel: Any, rec: Any, schemas: dict[int, Any]) -> Message:
+            ch = self._kept.get(channel.id)
             if ch is None:
-                ch = channels[channel.id] = Channel(
+                schema = schemas.get(channel.schema_id) if channel.schema_id else None
+                ch = self._kept[channel.id] = Channel(
                     channel.topic, channel.message_encoding,
                     None if schema is None else (schema.name, schema.encoding,
                                                  bytes(schema.data)),
                     tuple(sorted(channel.metadata.items())))
-            yield Record(message.log_time, message.publish_time, ch, bytes(message.data),
-                         message.sequence)
+            self.counts[ch.topic] = self.counts.get(ch.topic, 0) + 1
+            return Message(ch.topic, rec.log_time, rec.publish_time, None,
+                           Record(rec.log_time, rec.publish_time, ch, bytes(rec.data),
+                                  rec.sequence))
+
+    return _Raw(path)
 
 
 def _bag_records(path: str | os.PathLike[str]) -> Iterator[Record]:
@@ -157,13 +217,17 @@ def _rosbag2_records(path: str | os.PathLike[str]) -> Iterator[Record]:
 
 
 def write_shielded(path: str | os.PathLike[str], recorded: Iterable[Record],
-                   shielded: Iterable[Record], renamed: dict[str, str]) -> dict[str, int]:
+                   shielded: Iterable[Record], renamed: dict[str, str],
+                   gaps: Sequence[Gap] = ()) -> dict[str, int]:
     """Write the shielded recording ``path`` (through :func:`fretc.common.outputs.open_output`:
     a temporary file renamed over it, never through a link planted there): the
     ``recorded`` messages (each of a topic of ``renamed`` on the topic it maps to) merged
     with the ``shielded`` ones in log-time order (both given in it; a recorded message
     before a shield's message of the same log time, as the shield heard it before its
-    tick). Returns the messages written per topic.
+    tick). ``gaps``: the damage of the recording replayed, written in the Metadata record
+    :data:`fretc.logs.recorded_gaps.GAPS_METADATA` (the Header's library
+    :data:`fretc.logs.recorded_gaps.REPLAY_LIBRARY`), where the audit reads it. Returns the
+    messages written per topic.
 
     Raises:
         OutputError: the file cannot be written."""
@@ -172,7 +236,9 @@ def write_shielded(path: str | os.PathLike[str], recorded: Iterable[Record],
     counts: dict[str, int] = {}
     with open_output(path, "wb", encoding=None) as f:
         writer = Writer(f, compression=CompressionType.ZSTD)
-        writer.start(profile="", library="fretc shield-replay")
+        writer.start(profile="", library=REPLAY_LIBRARY)
+        if gaps:
+            writer.add_metadata(GAPS_METADATA, {"gaps": gaps_json(gaps)})
         schemas: dict[tuple[str, str, bytes], int] = {}
         channels: dict[tuple[Channel, str], int] = {}
         merged = heapq.merge(((r.log_time, 0, n, r) for n, r in enumerate(recorded)),

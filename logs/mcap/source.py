@@ -41,7 +41,7 @@ from fretc.logs.mcap.columns import TopicBlock, column_pass
 from fretc.logs.mcap.records import (MCAP_MAGIC, RECORD_ERRORS, RECORD_HEAD, chunk_messages,
                                      chunk_records)
 from fretc.logs.mcap.records import crc_skip, data_follows, parse_record
-from fretc.logs.recorded_gaps import (WATCH_LIBRARY, first_start, gap_problems, losses,
+from fretc.logs.recorded_gaps import (GAP_LIBRARIES, first_start, gap_problems, losses,
                                       read_recorded_gaps)
 from fretc.logs.reorder import REORDER_WINDOW_NS, ReorderQueue
 
@@ -113,7 +113,8 @@ class McapSource(LogSource):
                     "file is read record by record"))
         #: the gaps of a watched run its recording carries (:mod:`fretc.logs.recorded_gaps`)
         self.recorded_gaps: list[Gap] = []
-        if found.library == WATCH_LIBRARY and self._index is not None:
+        self._gaps_library = found.library
+        if found.library in GAP_LIBRARIES and self._index is not None:
             try:
                 self.recorded_gaps = read_recorded_gaps(self.path)
             except ValueError as exc:  # (where the watch lost messages is not known)
@@ -140,7 +141,7 @@ class McapSource(LogSource):
             lost = losses(self.recorded_gaps)  # (a silence, a publisher away, loses nothing)
             if lost:  # a watched run with a gap is partial, as the watch said
                 self.partial, self.damage_time = True, first_start(lost)
-            for p in gap_problems(self.recorded_gaps):
+            for p in gap_problems(self.recorded_gaps, self._gaps_library):
                 self._pass_problems.add(p)
 
     def _complete_index(self) -> None:

@@ -123,9 +123,18 @@ def _overrides_text(r: Any) -> str:
                      "shield's guarantee no longer holds from there")
     for topic, kept in r.renamed.items():
         lines.append(f"  recorded {topic} kept as {kept} (the shield publishes {topic})")
-    if r.problems:
-        lines.append(f"  the log's data problems: {len(r.problems)} (fretc audit of the log "
-                     f"lists them): {r.problems[0]}")
+    if r.damage is not None:
+        end, why = r.damage["damage_time_ns"], "; ".join(r.damage["problems"][:1])
+        lines.append(
+            f"  the recording is damaged: replayed up to log time {end} ns "
+            f"({_time(end, s)} from the first tick), nothing from there on (the audit of the "
+            f"shielded run is partial there): {why}" if end is not None else
+            f"  the recording is damaged, but no message was lost (every one replayed): {why}")
+    said = set(r.damage["problems"]) if r.damage is not None else set()
+    others = [p for p in r.problems if p not in said]  # (the damage's said above)
+    if others:
+        lines.append(f"  the log's data problems: {len(others)} (fretc audit of the log "
+                     f"lists them): {others[0]}")
     return "\n".join(lines)
 
 

@@ -1,0 +1,231 @@
+"""``fretc shield-replay`` over damaged recordings (../shared/DESIGN.md, "Damage is a gap"):
+the intact span is replayed and written, the damage is named (log time, what the reader
+said), and the audit of the shielded run is partial there.
+
+Metamorphic: the replay of a damaged copy of a shipped trace equals the replay of the intact
+trace truncated at the damage's log time (the shield's messages and the recorded messages of
+the span); the shielded run's verdicts never claim more than the intact replay's (never
+``satisfied`` where the intact replay is ``violated``); nothing is left half-written when
+the replay exits 2."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+from click.testing import CliRunner
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from fretc.cli import main
+
+REPO = Path(__file__).resolve().parents[2]
+TRACE = REPO / "traces" / "sif_disabled.mcap"
+REQS = ["-r", str(REPO / "requirements" / "safe_ros.fret"), "-r",
+        str(REPO / "requirements" / "shield" / "release.fret")]
+SHIELD_TOPICS = ("/cmd_vel_filtered", "/gwendolen_control")
+
+
+def run(*args: str):
+    return CliRunner().invoke(main, list(args))
+
+
+@pytest.fixture(scope="module")
+def shield_dir(tmp_path_factory) -> Path:
+    """The docs' simulator shield (R2..R6 and the release), Python form."""
+    out = tmp_path_factory.mktemp("shield")
+    got = run("shield", str(REPO / "requirements" / "safe_ros.fret"),
+              str(REPO / "requirements" / "shield" / "release.fret"), "-b",
+              str(REPO / "requirements" / "shield" / "safe_ros_shield.bindings.toml"),
+              "--inputs", "too_close,scan_stale,clearance,obstacle_ahead,obstacle_behind",
+              "--outputs", "stopped,stop_requested,forwarded_zero,linear_speed,angular_speed,"
+              "linear_velocity", "--emit", "python", "-o", str(out))
+    assert got.exit_code == 0, got.output
+    return out
+
+
+@pytest.fixture(scope="module")
+def intact(shield_dir, tmp_path_factory) -> dict:
+    """The replay of the intact trace: its JSON run."""
+    tmp = tmp_path_factory.mktemp("intact")
+    got = run("shield-replay", str(shield_dir), str(TRACE), "-o", str(tmp / "out"), *REQS,
+              "--json", str(tmp / "r.json"))
+    assert got.exit_code == 1, got.output
+    return json.loads((tmp / "r.json").read_text())["runs"][0]
+
+
+def by_topic(path: Path) -> dict[str, list]:
+    """topic -> [(log time, bytes)] by the mcap library."""
+    from mcap.reader import make_reader
+
+    out: dict[str, list] = {}
+    with open(path, "rb") as f:
+        for _schema, channel, message in make_reader(f).iter_messages(log_time_order=True):
+            out.setdefault(channel.topic, []).append((message.log_time, bytes(message.data)))
+    return {k: sorted(v) for k, v in out.items()}
+
+
+def truncated_copy(src: Path, dst: Path, end: int) -> None:
+    """``src`` copied by the mcap library with only the messages of log time < ``end``."""
+    from mcap.reader import make_reader
+    from mcap.writer import Writer
+
+    with open(src, "rb") as f, open(dst, "wb") as g:
+        w = Writer(g)
+        w.start()
+        schemas, channels = {}, {}
+        for schema, channel, m in make_reader(f).iter_messages(log_time_order=True):
+            if m.log_time >= end:
+                continue
+            if schema.id not in schemas:
+                schemas[schema.id] = w.register_schema(schema.name, schema.encoding,
+                                                       schema.data)
+            if channel.id not in channels:
+                channels[channel.id] = w.register_channel(
+                    channel.topic, channel.message_encoding, schemas[schema.id],
+                    dict(channel.metadata))
+            w.add_message(channels[channel.id], m.log_time, m.data, m.publish_time,
+                          m.sequence)
+        w.finish()
+
+
+def read_by_the_audit(path: Path) -> tuple[bool, bool]:
+    """(whether the audit's reader finds the log damaged, whether it reads no message of
+    /scan or none of /cmd_vel, which the shield reads, before the damage)."""
+    from fretc.common.errors import FretcError
+    from fretc.logs import open_log
+
+    try:
+        source = open_log(str(path))
+    except FretcError:
+        return True, True
+    times = {"/scan": [], "/cmd_vel": []}
+    for m in source.messages(set(times)):
+        times[m.topic].append(m.log_time)
+    end = source.intact_end
+    return source.partial, any(not [t for t in ts if end is None or t < end]
+                               for ts in times.values())
+
+
+def _cut(at: int):
+    return lambda data: data[:at]
+
+
+def _zeroed(at: int, n: int = 64):
+    return lambda data: data[:at] + bytes(n) + data[at + n:]
+
+
+# the trace's first chunk holds bytes 38 .. 277,014 (0 .. 13.6 s), its second 303,420 ..
+# 348,379 (13.6 .. 15.7 s), then the summary
+DAMAGES = {
+    "cut in the first chunk, early": _cut(40_000),
+    "cut in the first chunk": _cut(150_000),
+    "cut at the end of the first chunk": _cut(276_000),
+    "cut between the chunks": _cut(290_000),
+    "cut in the second chunk": _cut(320_000),
+    "cut in the summary": _cut(352_000),
+    "zeroed bytes in the first chunk": _zeroed(120_000),
+    "zeroed bytes in the second chunk": _zeroed(330_000),
+}
+
+
+@pytest.mark.parametrize("damage", sorted(DAMAGES))
+def test_a_damaged_recording_is_replayed_up_to_the_damage(shield_dir, intact, tmp_path,
+                                                          damage):
+    check_damaged(shield_dir, intact, tmp_path, DAMAGES[damage](TRACE.read_bytes()))
+
+
+@pytest.mark.slow
+@settings(max_examples=50)
+@given(at=st.integers(9, TRACE.stat().st_size - 1), zero=st.booleans(),
+       n=st.integers(1, 4096))
+def test_any_cut_or_zeroed_span_is_replayed_up_to_the_damage(shield_dir, intact, at, zero, n):
+    import tempfile
+
+    data = TRACE.read_bytes()
+    bad = _zeroed(at, n)(data)[:len(data)] if zero else _cut(at)(data)
+    with tempfile.TemporaryDirectory() as tmp:
+        check_damaged(shield_dir, intact, Path(tmp), bad)
+
+
+def check_damaged(shield_dir: Path, intact: dict, tmp_path: Path, data: bytes) -> None:
+    """The replay of the damaged recording ``data``: exit 2 with nothing written when the
+    audit's reader reads nothing before the damage; else the intact span replayed, equal
+    to the replay of the intact trace truncated there, its audit partial and never more
+    than the intact replay's."""
+    bad = tmp_path / "bad.mcap"
+    bad.write_bytes(data)
+    got = run("shield-replay", str(shield_dir), str(bad), "-o", str(tmp_path / "out"), *REQS,
+              "--json", str(tmp_path / "r.json"))
+    assert "Traceback" not in got.output and got.exception is None or \
+        isinstance(got.exception, SystemExit), got.output
+    partial, empty = read_by_the_audit(bad)
+    if got.exit_code == 2:  # (nothing could be read: nothing written)
+        assert "bad.mcap" in got.output and "damage" in got.output
+        assert not (tmp_path / "out").exists() or list((tmp_path / "out").iterdir()) == []
+        assert empty, got.output
+        return
+    doc = json.loads((tmp_path / "r.json").read_text())["runs"][0]
+    damaged = doc["damage"]
+    if not partial:  # (bytes the reader does not check, or changed to what they were)
+        assert damaged is None and doc["ticks"] == intact["ticks"]
+        return
+    assert damaged is not None, "the damage is said"
+    end = damaged["damage_time_ns"]
+    if end is None:  # (damage that loses no message: the summary; every message read)
+        assert doc["written"] == intact["written"] and doc["ticks"] == intact["ticks"]
+        assert "the recording is damaged" in got.output and damaged["problems"]
+        return
+    assert "the recording is damaged" in got.output and str(end) in got.output
+    assert damaged["problems"] and (doc["last_tick"] is None or doc["last_tick"] < end)
+    # metamorphic: the intact trace truncated at the same log time, replayed
+    truncated_copy(TRACE, tmp_path / "trunc.mcap", end)
+    again = run("shield-replay", str(shield_dir), str(tmp_path / "trunc.mcap"), "-o",
+                str(tmp_path / "t"), *REQS)
+    assert again.exit_code in (0, 1, 3), again.output
+    cut = by_topic(tmp_path / "out" / "bad.shielded.mcap")
+    ref = by_topic(tmp_path / "t" / "trunc.shielded.mcap")
+    assert set(cut) == set(ref)
+    for topic in ref:
+        assert cut[topic] == [m for m in ref[topic] if m[0] < end], topic
+    for topic in SHIELD_TOPICS:  # (the intact span's ticks, every one published)
+        assert len(cut[topic]) == doc["ticks"] > 0
+    # the audit of the shielded run is partial at the damage, never more than the intact's
+    audit = doc["audit"]
+    assert audit["partial"] is True and audit["damage_time_ns"] == end
+    full = {v["requirement"]: v["verdict"] for v in intact["audit"]["verdicts"]}
+    for v in audit["verdicts"]:
+        assert v["verdict"] in (full[v["requirement"]], "unknown"), (v, full)
+        if full[v["requirement"]] == "violated":
+            assert v["verdict"] != "satisfied"
+    assert got.exit_code == (1 if any(v["verdict"] == "violated" for v in audit["verdicts"])
+                             else 3)
+
+
+def test_a_recording_of_which_nothing_can_be_read_exits_2_and_writes_nothing(shield_dir,
+                                                                            tmp_path):
+    bad = tmp_path / "cut.mcap"
+    bad.write_bytes(TRACE.read_bytes()[:20])
+    got = run("shield-replay", str(shield_dir), str(bad), "-o", str(tmp_path / "out"), *REQS)
+    assert got.exit_code == 2, got.output
+    assert "cut.mcap" in got.output and "Traceback" not in got.output
+    assert list((tmp_path / "out").iterdir()) == []
+
+
+def test_the_shielded_recording_carries_the_damage_for_a_later_audit(shield_dir, tmp_path):
+    """``fretc audit`` of the written shielded recording, alone, is partial at the damage
+    too (the gap is carried in the file, as a watch's recording carries its own)."""
+    bad = tmp_path / "bad.mcap"
+    bad.write_bytes(TRACE.read_bytes()[:150_000])
+    got = run("shield-replay", str(shield_dir), str(bad), "-o", str(tmp_path / "out"), *REQS,
+              "--json", str(tmp_path / "r.json"))
+    assert got.exit_code in (1, 3), got.output
+    end = json.loads((tmp_path / "r.json").read_text())["runs"][0]["damage"]["damage_time_ns"]
+    bindings = str(next(shield_dir.glob("*.bindings.toml")))
+    again = run("audit", *REQS, "-b", bindings, str(tmp_path / "out" / "bad.shielded.mcap"),
+                "--no-progress", "--json", str(tmp_path / "a.json"))
+    la = json.loads((tmp_path / "a.json").read_text())["logs"][0]
+    assert la["partial"] is True and la["damage_time_ns"] == end, again.output
+    assert all(v["verdict"] != "satisfied" or v["requirement"] != "R5"
+               for v in la["verdicts"])  # (an invariant over a cut run is not satisfied)
