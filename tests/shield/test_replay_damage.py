@@ -229,3 +229,34 @@ def test_the_shielded_recording_carries_the_damage_for_a_later_audit(shield_dir,
     assert la["partial"] is True and la["damage_time_ns"] == end, again.output
     assert all(v["verdict"] != "satisfied" or v["requirement"] != "R5"
                for v in la["verdicts"])  # (an invariant over a cut run is not satisfied)
+
+
+@pytest.mark.parametrize("plugin", ["SQLITE3", "MCAP"])
+def test_a_rosbag2_folder_whose_storage_is_cut_is_refused_as_the_audit_refuses_it(
+        shield_dir, tmp_path, plugin):
+    """rosbags opens no cut rosbag2 storage (sqlite3: "database disk image is malformed";
+    MCAP: no end magic), so neither the audit nor the replay reads anything of it: exit 2,
+    the folder and the reader's words named, nothing written."""
+    from mcap.reader import make_reader
+    from rosbags.rosbag2 import StoragePlugin, Writer
+    from rosbags.typesys import Stores, get_typestore
+
+    store = get_typestore(Stores.ROS2_JAZZY)
+    bag = tmp_path / "run_bag"
+    with Writer(bag, version=9, storage_plugin=getattr(StoragePlugin, plugin)) as w, \
+            open(TRACE, "rb") as f:
+        conns = {}
+        for schema, channel, m in make_reader(f).iter_messages(log_time_order=True):
+            if channel.topic not in conns:
+                conns[channel.topic] = w.add_connection(channel.topic, schema.name,
+                                                        typestore=store)
+            w.write(conns[channel.topic], m.log_time, m.data)
+    storage = next(p for p in bag.iterdir() if p.suffix in (".db3", ".mcap"))
+    storage.write_bytes(storage.read_bytes()[: storage.stat().st_size // 2])
+    bindings = str(next(shield_dir.glob("*.bindings.toml")))
+    audited = run("audit", *REQS, "-b", bindings, str(bag), "--no-progress")
+    got = run("shield-replay", str(shield_dir), str(bag), "-o", str(tmp_path / "out"), *REQS)
+    assert audited.exit_code == got.exit_code == 2, (audited.output, got.output)
+    assert "run_bag" in got.output and "cannot open rosbag2" in got.output
+    assert "Traceback" not in got.output
+    assert list((tmp_path / "out").iterdir()) == []
