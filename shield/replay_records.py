@@ -112,6 +112,13 @@ class RecordedLog:
             raise ReplayLogError(f"{self.path}: a {self.kind} log holds no ROS messages to "
                                  "replay a shield over (MCAP, ROS 1 bags and rosbag2 "
                                  "folders only)")
+        if self.kind == "bag":
+            from fretc.logs.ros.bags import BagSource
+
+            bag = BagSource(self.path)
+            if bag.linear is not None:  # (a crashed recording: no index, read as the audit)
+                yield from self._ros1_linear(bag, until)
+                return
         last: int | None = None
         try:
             for r in (_bag_records if self.kind == "bag" else _rosbag2_records)(self.path):
@@ -123,6 +130,31 @@ class RecordedLog:
             self.intact_end = -(2**63) if last is None else last
             self.stopped = (f"reading stopped after log time {last} ns: "
                             f"{type(exc).__name__}: {exc}")
+
+    def _ros1_linear(self, bag: Any, until: int | None) -> Iterator[Record]:
+        """A ROS 1 bag whose index is damaged or missing, read record by record by the
+        audit's reader (:meth:`fretc.logs.ros.bags.BagSource.raw_messages`), each
+        connection a channel as :func:`_bag_records` makes it from its Connection record."""
+        channels: dict[int, Channel] = {}
+        for m in bag.raw_messages():
+            if until is not None and m.log_time >= until:
+                break
+            conn, raw = m.data
+            ch = channels.get(conn)
+            if ch is None:
+                f = bag.linear.fields[conn]
+                kind = f.get(b"type", b"").decode("utf-8", "replace")
+                pkg, _sep, name = kind.partition("/")
+                meta = {"md5sum": f.get(b"md5sum", b"").decode("utf-8", "replace"),
+                        "callerid": f.get(b"callerid", b"").decode("utf-8", "replace"),
+                        "latching": str(int(f.get(b"latching", b"0") or b"0"))}
+                ch = channels[conn] = Channel(
+                    m.topic, "ros1", (f"{pkg}/{name.split('/')[-1]}", "ros1msg",
+                                      f.get(b"message_definition", b"")),
+                    tuple(sorted(meta.items())))
+            yield Record(m.log_time, m.log_time, ch, raw)
+        self.intact_end = bag.intact_end
+        self.stopped = "; ".join(str(p) for p in bag.problems[:3])
 
     def _mcap(self, until: int | None) -> Iterator[Record]:
         source = _raw_mcap(self.path)

@@ -134,6 +134,24 @@ class BagSource(LogSource):
     def _reader(self) -> Any:
         return (Ros1Reader if self.kind == "bag" else Ros2Reader)(self._read_path)
 
+    @property
+    def linear(self) -> Ros1Linear | None:
+        """The record-by-record reader of a ROS 1 bag whose index is damaged or missing
+        (class docstring), or None when rosbags reads the bag."""
+        return self._linear_bag
+
+    def raw_messages(self) -> Iterator[Message]:
+        """A pass over a ROS 1 bag read record by record (:attr:`linear` not None): every
+        message undecoded (:meth:`~fretc.logs.ros.ros1_linear.Ros1Linear.raw_messages`),
+        the damage recorded as by :meth:`messages`.
+
+        Raises:
+            ValueError: rosbags reads this bag (its own reader gives the bytes)."""
+        if self._linear_bag is None:
+            raise ValueError(f"{self.path}: read by rosbags, not record by record")
+        self._begin_pass()
+        yield from self._linear_bag.raw_messages()
+
     def topics(self) -> dict[str, str]:
         """Topic → type name (normalized ``pkg/msg/Type``)."""
         return dict(sorted(self._topics.items()))

@@ -13,6 +13,7 @@ rosbags' reader needs the index at the end of the bag, so the records are framed
 from __future__ import annotations
 
 import bz2
+import functools
 import struct
 from collections.abc import Callable, Iterator
 from pathlib import Path
@@ -115,6 +116,9 @@ class Ros1Linear:
         self.src = source
         self.why = why
         self.conns: dict[int, tuple[str, str, str]] = {}  # conn -> (topic, type, definition)
+        #: conn -> the Connection record's fields (topic, type, md5sum, message_definition,
+        #: callerid, latching: ROS bag format 2.0), as the record gives them
+        self.fields: dict[int, dict[bytes, bytes]] = {}
 
     def scan(self) -> dict[str, str]:
         """Topic -> type name, from a pass that decodes nothing."""
@@ -126,16 +130,24 @@ class Ros1Linear:
         """Decoded messages of ``topics`` (all when None), in log-time order."""
         yield from _Ros1Pass(self, topics, decode=True).run()
 
+    def raw_messages(self) -> Iterator[Message]:
+        """Every message undecoded, in log-time order, with the damage of :meth:`messages`:
+        ``data`` is ``(connection id, the message's bytes)`` (its connection's fields in
+        :attr:`fields`), ``header_stamp`` None."""
+        yield from _Ros1Pass(self, None, decode=True, raw=True).run()
+
 
 class _Ros1Pass:
-    """One pass over the records of the bag (``decode`` False: connections and times only)."""
+    """One pass over the records of the bag (``decode`` False: connections and times only;
+    ``raw``: the messages' bytes delivered undecoded, :meth:`Ros1Linear.raw_messages`)."""
 
     def __init__(self, bag: Ros1Linear, topics: set[str] | frozenset[str] | None,
-                 decode: bool) -> None:
+                 decode: bool, raw: bool = False) -> None:
         self.bag = bag
         self.src = bag.src
         self.topics = topics
         self.decode = decode
+        self.raw = raw
         self.queue = ReorderQueue()
         self.last_good: int | None = None
         self.first_time: int | None = None  # the least log time of a message read
@@ -201,6 +213,7 @@ class _Ros1Pass:
         if op == _OP_CONN:
             conn = struct.unpack("<I", header[b"conn"])[0]
             f = _fields(body)
+            self.bag.fields.setdefault(conn, {b"topic": header.get(b"topic", b""), **f})
             self.bag.conns.setdefault(conn, (header.get(b"topic", f.get(b"topic", b"")).decode(),
                                              f.get(b"type", b"").decode(),
                                              f.get(b"message_definition", b"").decode(
@@ -245,6 +258,8 @@ class _Ros1Pass:
     def _decoder(self, conn: int, c: tuple[str, str, str], t: int
                  ) -> Callable[[bytes], Any] | None:
         """The decoder of connection ``conn`` (built once per pass; None: ``unknown_schema``)."""
+        if conn not in self.decoders and self.raw:
+            self.decoders[conn] = functools.partial(_undecoded, conn)
         if conn not in self.decoders:
             try:
                 store, typename = build_typestore("ros1msg", c[1], c[2])
@@ -253,3 +268,8 @@ class _Ros1Pass:
                 self.decoders[conn] = None
                 self.why[conn] = str(exc)
         return self.decoders[conn]
+
+
+def _undecoded(conn: int, body: bytes) -> tuple[int, bytes]:
+    """A raw pass's "decoding": the message's connection and bytes."""
+    return conn, bytes(body)
