@@ -175,6 +175,7 @@ def check_damaged(shield_dir: Path, intact: dict, tmp_path: Path, data: bytes) -
     end = damaged["damage_time_ns"]
     if end is None:  # (damage that loses no message: the summary; every message read)
         assert doc["written"] == intact["written"] and doc["ticks"] == intact["ticks"]
+        assert got.exit_code in (1, 3)  # (never 0 over a damaged recording)
         assert "the recording is damaged" in got.output and damaged["problems"]
         return
     assert "the recording is damaged" in got.output and str(end) in got.output
@@ -301,3 +302,32 @@ def test_a_cut_ros1_bag_is_replayed_up_to_the_damage_as_the_audit_reads_it(shiel
         assert mine[topic] == [m for m in ref[topic] if m[0] < end], topic
         assert mine[topic], topic  # (every topic has messages before the cut)
     assert doc["audit"]["partial"] is True and doc["audit"]["damage_time_ns"] == end
+
+
+def test_damage_that_loses_no_message_is_named_and_never_exits_0(shield_dir, tmp_path):
+    """Zeroed bytes in the summary (its CRC fails; every record is read without the index):
+    the whole recording replayed, the damage named, exit 3 where the shielded run's audit
+    alone would give 0 (as fretc audit of the recording gives 3)."""
+    data = bytearray(TRACE.read_bytes())
+    data[355_000:355_064] = bytes(64)
+    bad = tmp_path / "bad.mcap"
+    bad.write_bytes(bytes(data))
+    reqs = ["-r", str(REPO / "requirements" / "shield" / "release.fret")]
+    got = run("shield-replay", str(shield_dir), str(bad), "-o", str(tmp_path / "out"), *reqs,
+              "--json", str(tmp_path / "r.json"))
+    assert got.exit_code == 3, got.output
+    doc = json.loads((tmp_path / "r.json").read_text())
+    assert doc["exit_code"] == 3 and doc["runs"][0]["audit"]["partial"] is False
+    damage = doc["runs"][0]["damage"]
+    assert damage["damage_time_ns"] is None and "summary" in damage["problems"][0]
+    assert "no message was lost" in got.output
+    assert by_topic(tmp_path / "out" / "bad.shielded.mcap") == by_topic(
+        run_whole(shield_dir, tmp_path, reqs))
+
+
+def run_whole(shield_dir: Path, tmp_path: Path, reqs: list[str]) -> Path:
+    """The intact trace's shielded recording, replayed into ``tmp_path / "whole"``."""
+    got = run("shield-replay", str(shield_dir), str(TRACE), "-o", str(tmp_path / "whole"),
+              *reqs)
+    assert got.exit_code == 0, got.output
+    return tmp_path / "whole" / "sif_disabled.shielded.mcap"

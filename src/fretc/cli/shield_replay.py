@@ -9,8 +9,9 @@ For each log, writes ``DIR/NAME.shielded.mcap`` (every recorded message as it wa
 shield's corrected outputs added on their topics at each tick), prints the overrides per
 requirement and the audit of the shielded run. Exit status: the audit's of the shielded
 runs (0 every verdict satisfied or vacuous, 1 a requirement violated, 3 a log partial or
-with data problems, an unknown verdict); 2 input errors (the folder, a log, a topic, a log
-time named).
+with data problems, an unknown verdict, a recording damaged even where no message was lost);
+2 input errors (the folder, a log, a topic, a log time named; a recording damaged before any
+message the shield reads).
 """
 
 from __future__ import annotations
@@ -54,7 +55,8 @@ def shield_replay_cmd(ctx: click.Context, shield_dir: str, logs: tuple[str, ...]
       1  a requirement is violated in a shielded run
       2  usage or input error (the folder, a log, a topic or a log time named)
       3  no violation, but a log is partial or had data problems, or a verdict
-         is unknown"""
+         is unknown, or a recording replayed is damaged (damage replays the span
+         before it: the shielded run's audit is partial there)"""
     from fretc.common.outputs import output_folder
     from fretc.shield.replay import ReplayError, load_folder, replay_log, shielded_name
 
@@ -82,10 +84,17 @@ def shield_replay_cmd(ctx: click.Context, shield_dir: str, logs: tuple[str, ...]
                err=json_path == "-")
     audits, code = _audit(reqs, str(folder.bindings_file), [r.written for r in results],
                           to_stdout=json_path == "-")
+    whole = [r.log for r in results
+             if r.damage is not None and r.damage["damage_time_ns"] is None]
+    if code == 0 and whole:  # (every message replayed, but the recording is damaged)
+        code = 3
+        click.echo(shown(f"exit 3: {', '.join(whole)} is damaged, though no message was "
+                         "lost (fretc audit of it is partial)"), err=json_path == "-")
     if json_path:
         doc = {"shield": str(folder.module), "bindings": str(folder.bindings_file),
                "requirements": list(reqs),
-               "runs": [{**r.as_json(), "audit": a.to_json()} for r, a in zip(results, audits)]}
+               "runs": [{**r.as_json(), "audit": a.to_json()} for r, a in zip(results, audits)],
+               "exit_code": code}
         _write_json(doc, json_path)
     ctx.exit(code)
 
