@@ -320,7 +320,7 @@ def test_damage_that_loses_no_message_is_named_and_never_exits_0(shield_dir, tmp
     assert doc["exit_code"] == 3 and doc["runs"][0]["audit"]["partial"] is False
     damage = doc["runs"][0]["damage"]
     assert damage["damage_time_ns"] is None and "summary" in damage["problems"][0]
-    assert "no message was lost" in got.output
+    assert "every message in it replayed" in got.output
     assert by_topic(tmp_path / "out" / "bad.shielded.mcap") == by_topic(
         run_whole(shield_dir, tmp_path, reqs))
 
@@ -331,3 +331,46 @@ def run_whole(shield_dir: Path, tmp_path: Path, reqs: list[str]) -> Path:
               *reqs)
     assert got.exit_code == 0, got.output
     return tmp_path / "whole" / "sif_disabled.shielded.mcap"
+
+
+def test_a_watch_recording_s_gaps_are_carried_into_the_shielded_recording(shield_dir,
+                                                                         tmp_path):
+    """A recording of ``fretc watch --record`` carries the gaps in which the watch lost
+    messages; the shielded recording carries them on, so its audit is partial as the
+    recording's is."""
+    from mcap.reader import make_reader
+    from mcap.writer import Writer
+
+    from fretc.logs.base import Gap
+    from fretc.logs.recorded_gaps import GAPS_METADATA, WATCH_LIBRARY, gaps_json, parse_gaps
+
+    lost = [Gap(1_700_000_005_000_000_000, 1_700_000_006_000_000_000, frozenset({"/scan"}),
+                "dropped")]
+    watched = tmp_path / "watched.mcap"
+    with open(TRACE, "rb") as f, open(watched, "wb") as g:
+        w = Writer(g)
+        w.start(profile="ros2", library=WATCH_LIBRARY)
+        schemas, channels = {}, {}
+        for schema, channel, m in make_reader(f).iter_messages(log_time_order=True):
+            if channel.topic == "/scan" and lost[0].start <= m.log_time <= lost[0].end:
+                continue  # (what the watch lost)
+            if schema.id not in schemas:
+                schemas[schema.id] = w.register_schema(schema.name, schema.encoding,
+                                                       schema.data)
+            if channel.id not in channels:
+                channels[channel.id] = w.register_channel(
+                    channel.topic, channel.message_encoding, schemas[schema.id],
+                    dict(channel.metadata))
+            w.add_message(channels[channel.id], m.log_time, m.data, m.publish_time,
+                          m.sequence)
+        w.add_metadata(GAPS_METADATA, {"gaps": gaps_json(lost)})
+        w.finish()
+    got = run("shield-replay", str(shield_dir), str(watched), "-o", str(tmp_path / "out"),
+              *REQS, "--json", str(tmp_path / "r.json"))
+    assert got.exit_code in (1, 3), got.output
+    with open(tmp_path / "out" / "watched.shielded.mcap", "rb") as f:
+        carried = [parse_gaps(m.metadata["gaps"]) for m in make_reader(f).iter_metadata()
+                   if m.name == GAPS_METADATA]
+    assert carried == [lost]
+    audit = json.loads((tmp_path / "r.json").read_text())["runs"][0]["audit"]
+    assert audit["partial"] is True and audit["damage_time_ns"] == lost[0].start

@@ -88,8 +88,9 @@ def shield_replay_cmd(ctx: click.Context, shield_dir: str, logs: tuple[str, ...]
              if r.damage is not None and r.damage["damage_time_ns"] is None]
     if code == 0 and whole:  # (every message replayed, but the recording is damaged)
         code = 3
-        click.echo(shown(f"exit 3: {', '.join(whole)} is damaged, though no message was "
-                         "lost (fretc audit of it is partial)"), err=json_path == "-")
+        click.echo(shown(f"exit 3: {', '.join(whole)} is damaged, though every message in "
+                         "it was replayed (fretc audit of it is partial)"),
+                   err=json_path == "-")
     if json_path:
         doc = {"shield": str(folder.module), "bindings": str(folder.bindings_file),
                "requirements": list(reqs),
@@ -138,7 +139,7 @@ def _overrides_text(r: Any) -> str:
             f"  the recording is damaged: replayed up to log time {end} ns "
             f"({_time(end, s)} from the first tick), nothing from there on (the audit of the "
             f"shielded run is partial there): {why}" if end is not None else
-            f"  the recording is damaged, but no message was lost (every one replayed): {why}")
+            f"  the recording is damaged (every message in it replayed): {why}")
     said = set(r.damage["problems"]) if r.damage is not None else set()
     others = [p for p in r.problems if p not in said]  # (the damage's said above)
     if others:
