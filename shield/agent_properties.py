@@ -29,7 +29,10 @@ atoms (a temporal function) are not stated; the file says why.
 controller keeps proposing ``push`` (:func:`fretc.shield.emit_gwendolen.proposals`), the stop
 is eventually released for good (the shield's minimal interference; an agent that latches the
 stop violates it). It is stated only when the shield itself has it: stepped here from every
-state the environment reaches, the output ends false on every such run.
+state the environment reaches (every input valuation and proposal), the output ends false on
+every such run. AJPF checks it on the agent with an environment that proposes ``push`` only
+(its ``.ail``): half the choices a tick, a JPF run of minutes; the states only a ``stop``
+proposal reaches are those checked here on the machine, which the agent runs.
 """
 
 from __future__ import annotations
@@ -191,9 +194,10 @@ def scoped_inputs(shield: Shield, compiled: Sequence[Any], rids: Sequence[str],
 
 def agent_properties(shield: Shield, compiled: Sequence[Any], atoms: Any, agent: str,
                      props: Sequence[tuple[str, list[int], str]], valuations: Sequence[int]
-                     ) -> tuple[str, dict[str, list[str]]]:
+                     ) -> tuple[str, dict[str, tuple[list[str], list[str]]]]:
     """The ``.psl`` text and, per property label, the input atoms its ``.ail`` changes
-    (:func:`scoped_inputs`)."""
+    (:func:`scoped_inputs`) and the proposals its environment makes (empty: every one; a
+    release property: ``push`` only, module docstring)."""
     atom_of: dict[tuple[str, str], str] = {}
     for m in shield.machines:
         for a in (*m.inputs, *m.outputs):
@@ -207,7 +211,7 @@ def agent_properties(shield: Shield, compiled: Sequence[Any], atoms: Any, agent:
              "# its first tick on. AJPF's LTL has no next operator and cannot count ticks: what",
              "# each property leaves out is said above it. Lines starting with # are comments."]
     used: set[str] = set()
-    scoped: dict[str, list[str]] = {}
+    scoped: dict[str, tuple[list[str], list[str]]] = {}
     for r in shield.requirements:
         c = by_id.get(r.id)
         if c is None:
@@ -221,7 +225,7 @@ def agent_properties(shield: Shield, compiled: Sequence[Any], atoms: Any, agent:
             continue
         lines.append(f"#   {what}")
         lines.append(f"{label}: {formula}")
-        scoped[label] = scoped_inputs(shield, compiled, [r.id], input_terms)
+        scoped[label] = (scoped_inputs(shield, compiled, [r.id], input_terms), [])
     for rid, why in shield.monitored.items():
         lines.append(f"# {_one_line(rid)}: monitored only, not in the agent ({_one_line(why)})")
     lines += _releases(shield, compiled, atoms, agent, props, valuations, used, scoped,
@@ -237,7 +241,8 @@ def _one_line(text: str) -> str:
 
 def _releases(shield: Shield, compiled: Sequence[Any], atoms: Any, agent: str,
               props: Sequence[tuple[str, list[int], str]], valuations: Sequence[int],
-              used: set[str], scoped: dict[str, list[str]], input_terms: dict[str, str]
+              used: set[str], scoped: dict[str, tuple[list[str], list[str]]],
+              input_terms: dict[str, str]
               ) -> list[str]:
     """The release properties (module docstring) and their comments."""
     if shield.fallback is None or 0 not in valuations:
@@ -269,7 +274,8 @@ def _releases(shield: Shield, compiled: Sequence[Any], atoms: Any, agent: str,
                        f"{atoms.term[a.text]}))))")
             readers = [r for r in m.requirements
                        if a.variable in _variables(next(c for c in compiled if c.id == r))]
-            scoped[label] = scoped_inputs(shield, compiled, readers, input_terms)
+            scoped[label] = (scoped_inputs(shield, compiled, readers, input_terms),
+                             [props[0][0]])
         start += len(m.outputs)
     return out
 

@@ -30,7 +30,8 @@ enforced requirement, Safe-ROS's ``agilex_agent``):
   ticks: a property is read where a tick's inputs and its decided outputs are both believed).
   ``N_LABEL.ail`` per property: the environment changing only the inputs that property's
   requirement reads and those of the requirements sharing an output with it (the others stay
-  false), which AJPF explores in minutes where every input takes hours.
+  false; a release property's, the controller proposing ``push`` only), which AJPF explores
+  in minutes where every input takes hours.
 * ``N.psl``: one AJPF property per enforced requirement (:mod:`fretc.shield.agent_properties`:
   ``immediately`` exactly, over ticks; what AJPF's LTL cannot count said in the file) and the
   release of each stop output (``release_stopped``).
@@ -263,11 +264,13 @@ def render_gwendolen(shield: Shield, compiled: Sequence[Any], base: str) -> dict
              f"{base}_shield.java": env.get_template("gwendolen_shield.java.j2").render(**ctx),
              f"{base}_env.java": env.get_template("gwendolen_env.java.j2").render(**ctx),
              f"{base}.ail": _ail(base), f"{base}.psl": psl}
-    for label, inputs in scoped.items():
-        files[f"{base}_{label}.ail"] = _ail(base, [
-            f"# {label}: the environment changes only {', '.join(inputs) or 'no input'} "
-            "(the others stay false)",
-            f"{base}_env.inputs = {','.join(inputs)}"])
+    for label, (inputs, chosen) in scoped.items():
+        settings = [f"# {label}: the environment changes only {', '.join(inputs) or 'no input'} "
+                    "(the others stay false)", f"{base}_env.inputs = {','.join(inputs)}"]
+        if chosen:
+            settings += [f"# {label}: the controller proposes only {', '.join(chosen)}",
+                         f"{base}_env.proposals = {','.join(chosen)}"]
+        files[f"{base}_{label}.ail"] = _ail(base, settings)
     return files
 
 
