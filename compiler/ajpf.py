@@ -101,7 +101,10 @@ def _check_mapping(path: str, data: dict) -> None:
         want_str(name, f"comparisons.{one_line(repr(text))}")
 
 
-def _label(rid: str, used: set) -> str:
+def psl_label(rid: str, used: set[str]) -> str:
+    """The AJPF property label of requirement ``rid``: its characters outside
+    ``[A-Za-z0-9_]`` made ``_`` (a name a ``.psl`` line may start with),
+    ``_2``, ``_3``, ... appended until it is not in ``used``, to which it is added."""
     base = re.sub(r"[^A-Za-z0-9_]", "_", rid) or "req"
     label, k = base, 2
     while label in used:
@@ -224,7 +227,7 @@ def emit_psl(compiled: Sequence[Compiled], mapping_path: str | None = None) -> d
             except AjpfError as exc:
                 lines.append("#   no AJPF property: " + _comment(str(exc)))
                 continue
-            lines.append(f"{_label(c.id, used)}: {formula}")
+            lines.append(f"{psl_label(c.id, used)}: {formula}")
         out[stems[source]] = "\n".join(lines) + "\n"
     return out
 
@@ -268,7 +271,7 @@ def psl_label_and_formula(compiled: Compiled, mapping: dict | None = None
     try:
         assert compiled.requirement is not None  # (it formalized)
         agent = mapping.get("agent") or compiled.requirement.component
-        return _label(compiled.id, set()), to_ajpf(compiled.formalization.ft_inf, agent,
+        return psl_label(compiled.id, set()), to_ajpf(compiled.formalization.ft_inf, agent,
                                                     mapping)
     except AjpfError as exc:
         return None, str(exc)

@@ -37,11 +37,11 @@ proposal reaches are those checked here on the machine, which the agent runs.
 
 from __future__ import annotations
 
-import re
 from collections.abc import Sequence
 from typing import Any
 
 from fretc.compiler import ir
+from fretc.compiler.ajpf import psl_label
 from fretc.compiler.expressions import Expander, SemanticsError
 from fretc.compiler.ir import Node
 from fretc.compiler.printers import to_smv
@@ -52,15 +52,6 @@ __all__ = ["agent_properties", "scoped_inputs", "MAX_RELEASE_STEPS"]
 #: the release is checked by stepping the shield over the environment's reachable states: at
 #: most this many steps (beyond, it is not stated, and the file says so)
 MAX_RELEASE_STEPS = 200_000
-
-
-def _label(rid: str, used: set[str]) -> str:
-    base = re.sub(r"[^A-Za-z0-9_]", "_", rid) or "req"
-    label, k = base, 2
-    while label in used:
-        label, k = f"{base}_{k}", k + 1
-    used.add(label)
-    return label
 
 
 class _Unstated(Exception):
@@ -216,7 +207,7 @@ def agent_properties(shield: Shield, compiled: Sequence[Any], atoms: Any, agent:
         c = by_id.get(r.id)
         if c is None:
             continue
-        label = _label(r.id, used)
+        label = psl_label(r.id, used)
         lines.append(f"# {label}: {_one_line(c.text)}")
         try:
             formula, what = _statement(c, atom_of, agent, shield.period)
@@ -257,7 +248,7 @@ def _releases(shield: Shield, compiled: Sequence[Any], atoms: Any, agent: str,
         for j, a in enumerate(m.outputs):
             if a.op is not None or not fb[j] or push[start + j]:
                 continue
-            label = _label(f"release_{atoms.term[a.text]}", used)
+            label = psl_label(f"release_{atoms.term[a.text]}", used)
             held = released_for_good(shield, k, j, [p for _n, p, _w in props], valuations,
                                      atoms, push)
             out.append(f"# {label}: once every input atom stays false and the controller "

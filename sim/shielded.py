@@ -12,11 +12,11 @@ with its reasons (:attr:`ShieldedSafety.overrides`).
 
 from __future__ import annotations
 
-import importlib.util
 from pathlib import Path
 from typing import Any
 
 from fretc.shield.messages import MessageShield, ShieldInputError, proposals_of
+from fretc.shield.replay import ReplayError, load_folder
 from fretc.signals.bindings.files import load_bindings
 
 __all__ = ["ShieldedSafety", "SHIELD_PREFIX", "DEFAULT_PROPOSALS"]
@@ -32,25 +32,20 @@ class ShieldedSafety:
     built with) between the simulated robot's topics (module docstring).
 
     Raises:
-        ValueError: the folder does not hold exactly one of each."""
+        ValueError: the folder does not hold exactly one of each, or its module does not
+            load or defines no ``Shield`` (:func:`fretc.shield.replay.load_folder`'s
+            reasons)."""
 
     def __init__(self, folder: str | Path, factory: Any = None):
-        folder = Path(folder)
-        modules = sorted(folder.glob("*_shield.py"))
-        bindings = sorted(folder.glob("*.bindings.toml"))
-        if len(modules) != 1 or len(bindings) != 1:
-            raise ValueError(f"{folder}: a shield folder holds one *_shield.py and one "
-                             "*.bindings.toml (fretc shield --emit python -b BINDINGS -o DIR); "
-                             f"found {len(modules)} and {len(bindings)}")
-        spec = importlib.util.spec_from_file_location(modules[0].stem, modules[0])
-        assert spec is not None and spec.loader is not None
-        module = importlib.util.module_from_spec(spec)
-        spec.loader.exec_module(module)
-        self.path = modules[0]
-        self.runtime = module.Shield()
-        self.bindings_file = bindings[0]
-        self.bindings = load_bindings(bindings[0])
-        self.proposals = proposals_of(bindings[0]) or dict(DEFAULT_PROPOSALS)
+        try:
+            loaded = load_folder(folder)
+        except ReplayError as exc:
+            raise ValueError(str(exc)) from None
+        self.path = loaded.module
+        self.runtime = loaded.shield_class()
+        self.bindings_file = loaded.bindings_file
+        self.bindings = load_bindings(loaded.bindings_file)
+        self.proposals = proposals_of(loaded.bindings_file) or dict(DEFAULT_PROPOSALS)
         self.factory = factory
         self.shield: MessageShield | None = None
         #: (sim time s, reasons, changed output atoms) of every override

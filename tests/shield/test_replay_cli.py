@@ -10,30 +10,16 @@ import json
 from pathlib import Path
 
 import pytest
-from click.testing import CliRunner
-
-from fretc.cli import main
-
-REPO = Path(__file__).resolve().parents[2]
-TRACE = REPO / "traces" / "sif_disabled.mcap"
 
 
-def run(*args: str):
-    return CliRunner().invoke(main, list(args))
+from _replay import REPO, TRACE, docs_shield, run
+
 
 
 @pytest.fixture(scope="module")
 def shield_dir(tmp_path_factory) -> Path:
     """The docs' simulator shield (R2..R6 and the release), Python form."""
-    out = tmp_path_factory.mktemp("shield")
-    got = run("shield", str(REPO / "requirements" / "safe_ros.fret"),
-              str(REPO / "requirements" / "shield" / "release.fret"), "-b",
-              str(REPO / "requirements" / "shield" / "safe_ros_shield.bindings.toml"),
-              "--inputs", "too_close,scan_stale,clearance,obstacle_ahead,obstacle_behind",
-              "--outputs", "stopped,stop_requested,forwarded_zero,linear_speed,angular_speed,"
-              "linear_velocity", "--emit", "python", "-o", str(out))
-    assert got.exit_code == 0, got.output
-    return out
+    return docs_shield(tmp_path_factory.mktemp("shield"))
 
 
 def by_topic(path: Path) -> dict[str, list]:

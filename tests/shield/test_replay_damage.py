@@ -14,35 +14,21 @@ import json
 from pathlib import Path
 
 import pytest
-from click.testing import CliRunner
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from fretc.cli import main
 
-REPO = Path(__file__).resolve().parents[2]
-TRACE = REPO / "traces" / "sif_disabled.mcap"
+from _replay import REPO, TRACE, docs_shield, run
+
 REQS = ["-r", str(REPO / "requirements" / "safe_ros.fret"), "-r",
         str(REPO / "requirements" / "shield" / "release.fret")]
 SHIELD_TOPICS = ("/cmd_vel_filtered", "/gwendolen_control")
 
 
-def run(*args: str):
-    return CliRunner().invoke(main, list(args))
-
-
 @pytest.fixture(scope="module")
 def shield_dir(tmp_path_factory) -> Path:
     """The docs' simulator shield (R2..R6 and the release), Python form."""
-    out = tmp_path_factory.mktemp("shield")
-    got = run("shield", str(REPO / "requirements" / "safe_ros.fret"),
-              str(REPO / "requirements" / "shield" / "release.fret"), "-b",
-              str(REPO / "requirements" / "shield" / "safe_ros_shield.bindings.toml"),
-              "--inputs", "too_close,scan_stale,clearance,obstacle_ahead,obstacle_behind",
-              "--outputs", "stopped,stop_requested,forwarded_zero,linear_speed,angular_speed,"
-              "linear_velocity", "--emit", "python", "-o", str(out))
-    assert got.exit_code == 0, got.output
-    return out
+    return docs_shield(tmp_path_factory.mktemp("shield"))
 
 
 @pytest.fixture(scope="module")

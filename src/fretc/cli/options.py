@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import math
 import os
+import sys
 from collections.abc import Callable, Sequence
 from typing import Any, TYPE_CHECKING, TypeVar
 
@@ -31,7 +32,7 @@ __all__ = ["TEXT_ATTRIBUTE_OPTION", "text_attribute", "BRIDGE_GAPS_OPTION", "bri
            "audit_input_options", "live_input_options", "audit_config", "ray_options",
            "run_audits", "META", "FleetError", "shown", "FiniteRange", "statistics_options",
            "names_of", "io_options", "set_bindings_option", "budget_options", "RequirementSet",
-           "requirement_set", "with_safety", "selection_options"]
+           "requirement_set", "with_safety", "selection_options", "exit_on_compile_errors"]
 
 
 class FiniteRange(click.FloatRange):
@@ -581,6 +582,22 @@ def requirement_set(files: Sequence[str], bindings_file: str | None, *,
     if only is not None or exclude is not None:
         entries = _selected(entries, only, exclude)
     return RequirementSet(as_written, entries, notes, bindings, component, every)
+
+
+def exit_on_compile_errors(files: Sequence[str], compiled: Sequence[Any],
+                           also: Sequence[Any] = ()) -> None:
+    """Print the error of every requirement of ``compiled`` and ``also`` (entries of
+    :func:`fretc.compiler.build.compile_entries`; ``also``: others read beside them, such as
+    ``--assume``'s) that could not be compiled, each naming its file:line:col, and exit 2
+    if there is one, or if ``compiled`` is empty (no requirement in ``files``)."""
+    bad = [c for c in [*compiled, *also] if c.error is not None]
+    for c in bad:
+        click.echo(shown(str(c.error)), err=True)
+    if bad:
+        sys.exit(2)
+    if not compiled:
+        click.echo(shown(f"error: no requirement in {', '.join(files)}"), err=True)
+        sys.exit(2)
 
 
 def _beside(files: Sequence[str]) -> tuple[Any, str]:

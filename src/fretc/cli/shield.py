@@ -24,7 +24,8 @@ from typing import Any
 import click
 
 from fretc.cli.options import (TEXT_ATTRIBUTE_OPTION, budget_options, io_options, names_of,
-                               requirement_set, selection_options, set_bindings_option, shown)
+                               exit_on_compile_errors, requirement_set, selection_options,
+                               set_bindings_option, shown)
 
 __all__ = ["shield_cmd", "FORMS"]
 
@@ -157,14 +158,7 @@ def _read(files: Sequence[str], assume: Sequence[str], bindings_file: str | None
         click.echo(shown(f"error: {', '.join(twice)}: both a requirement and an assumption "
                          "(--assume): give each one id"), err=True)
         sys.exit(2)
-    bad = [c for c in [*compiled, *assumed] if c.error is not None]
-    for c in bad:
-        click.echo(shown(str(c.error)), err=True)
-    if bad:
-        sys.exit(2)
-    if not compiled:
-        click.echo(shown(f"error: no requirement in {', '.join(files)}"), err=True)
-        sys.exit(2)
+    exit_on_compile_errors(files, compiled, assumed)
     return rs, compiled, assumed
 
 

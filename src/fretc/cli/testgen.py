@@ -39,7 +39,8 @@ from pathlib import Path
 
 import click
 
-from fretc.cli.options import TEXT_ATTRIBUTE_OPTION, requirement_set, set_bindings_option, shown
+from fretc.cli.options import (TEXT_ATTRIBUTE_OPTION, exit_on_compile_errors, requirement_set,
+                               set_bindings_option, shown)
 
 __all__ = ["testgen_cmd"]
 
@@ -68,14 +69,7 @@ def testgen_cmd(files: tuple[str, ...], out_dir: str, with_pytest: bool, binding
     rs = requirement_set(files, bindings_file)
     entries = rs.entries
     compiled = compile_entries(entries)
-    bad = [c for c in compiled if c.error is not None]
-    for c in bad:
-        click.echo(shown(str(c.error)), err=True)
-    if bad:
-        sys.exit(2)
-    if not compiled:
-        click.echo(shown(f"error: no requirement in {', '.join(files)}"), err=True)
-        sys.exit(2)
+    exit_on_compile_errors(files, compiled)
     bindings = rs.bindings
     gen = generate(compiled)
     if bindings is not None:
