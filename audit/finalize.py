@@ -12,7 +12,7 @@ the one the intact span decides (:mod:`fretc.audit.damage`).
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import replace
 from typing import TYPE_CHECKING, Any
 
@@ -21,7 +21,7 @@ import numpy as np
 from fretc.signals.bindings import Bindings
 from fretc.signals.clock import unsampled_of
 from fretc.audit.damage import open_obligations, verdict_at_damage
-from fretc.monitors.interval import OBLIGATIONS, EvidenceUnsupported
+from fretc.monitors.interval import OBLIGATIONS, Evidence, EvidenceUnsupported
 from fretc.monitors.judge import judge, nan_ticks
 from fretc.monitors.unknowns import Unknowns
 from fretc.monitors.stepwise import to_python
@@ -34,14 +34,14 @@ from fretc.audit.unknown_ticks import judge_three
 from fretc.common.problems import NAN
 from fretc.compiler.ir import walk
 from fretc.monitors.vectorized import supports
-from fretc.monitors.robustness import TINY
+from fretc.monitors.robustness import TINY, margin_ticks
 
 if TYPE_CHECKING:
     from fretc.signals.clock import Sampling
     from fretc.audit.verdict import LogAudit, Verdict
 
 __all__ = ["finalize", "between_ticks", "prepare", "unknown_of", "NAN_FALSE_NOTE",
-           "vacuous_note"]
+           "vacuous_note", "judged", "shown_ticks", "StreamTicks"]
 
 #: The note of every verdict judged under a binding file's ``[tick] nan = "false"``.
 NAN_FALSE_NOTE = ("NaN policy of the binding file ([tick] nan = \"false\"): a comparison "
@@ -163,13 +163,41 @@ def _verdict(plan: AuditPlan, r: RequirementPlan, res: ClockPass, bindings: Bind
             if holds is None:
                 return
         _robustness(r, res, bindings, v, j.robustness, holds)
+    _decided(plan, r, v, holds, ev, status, st_tick, n, lambda: _own_ticks(r, res, bindings))
+    if v.verdict == "violated":
+        _values_around(plan.config.window, r, res, bindings, v)
+
+
+def judged(plan: AuditPlan, r: RequirementPlan, v: Verdict, ticks: StreamTicks,
+           ev: Evidence, ltl3: tuple[str, int | None, int | None],
+           rob: tuple[float, int, int, list[tuple[int, int, float]]]) -> None:
+    """Set the verdict ``v`` of ``r`` as :func:`finalize` sets it on a trace without
+    unknown ticks or damage, from what was decided over its ``ticks.n`` ticks without
+    their columns (:mod:`fretc.audit.streamed`): the interval semantics' evidence ``ev``,
+    the LTL3 verdict ``(status, tick, time)`` and the robustness ``(value, tick, time of
+    that tick, margin points (tick, time, value))``. The values around a violation
+    (``v.values``, ``v.sources``) are the caller's: at :func:`shown_ticks`."""
+    v.engine = "interval"
+    v.intervals, v.triggers, v.violations = ev.intervals, ev.triggers, ev.violations
+    status, tick, time = ltl3
+    v.ltl3 = Ltl3(status, tick, time)
+    value, at, at_time, points = rob
+    held = at_time if at_time >= 0 else None
+    _robustness_fields(v, ev.holds, value, TimePoint(at, at_time, held), points)
+    _decided(plan, r, v, ev.holds, ev, status, tick, ticks.n, lambda: ticks)
+
+
+def _decided(plan: AuditPlan, r: RequirementPlan, v, holds: bool, ev, status: str,
+             st_tick: int | None, n: int, ticks: Callable[[], _Ticks | StreamTicks]) -> None:
+    """The verdict word of a decided requirement (``holds``), its vacuity's note, and a
+    violation's evidence (:func:`_first_violation`, over the ticks ``ticks()`` gives)."""
     if holds:
         v.verdict = "vacuous" if (ev is not None and ev.vacuous) else "satisfied"
         if v.verdict == "vacuous" and ev is not None:
             v.notes.append(vacuous_note(ev.intervals))
         return
     v.verdict = "violated"
-    _violation_evidence(plan, r, res, bindings, v, ev, status, st_tick)
+    _first_violation(r, v, ev, status, st_tick, n, ticks())
 
 
 def _nan_unknown(bindings) -> bool:
@@ -334,6 +362,32 @@ def _judge_at_damage(r: RequirementPlan, res: ClockPass, v, holds: bool, ev, sta
     return verdict != "violated"
 
 
+class StreamTicks:
+    """The ticks of a CSV trace judged as it was read (:mod:`fretc.audit.streamed`), as
+    :class:`_Ticks` gives a clock's ticks: ``times`` the times (ns) of the ticks the
+    evidence names, ``n`` ticks, the last at ``last_time``. A row's message is the row:
+    its log time the tick's time (None when negative, as a held log time)."""
+
+    def __init__(self, times: Mapping[int, int], n: int, last_time: int) -> None:
+        self.times, self.n, self.last_time = times, n, last_time
+
+    def point(self, i: int) -> TimePoint:
+        """Tick ``i`` (the nearest tick's time outside ``0..n-1``) as a TimePoint.
+
+        Raises:
+            KeyError: a tick the evidence did not name."""
+        j = min(max(i, 0), self.n - 1)
+        t = self.last_time if j == self.n - 1 else self.times[j]
+        return TimePoint(int(i), t, t if t >= 0 else None)
+
+    def time_at(self, i: int) -> int | None:
+        """The time of tick ``i`` (None past the trace: a CSV trace has no bindings'
+        period to count on with)."""
+        if i == self.n - 1:
+            return self.last_time
+        return self.times[i] if 0 <= i < self.n else None
+
+
 class _Ticks:
     """Tick indexes of one clock as :class:`fretc.audit.verdict.TimePoint` and times."""
 
@@ -376,41 +430,48 @@ def _robustness(r: RequirementPlan, res: ClockPass, bindings: Bindings | None, v
     if rob is None:
         v.notes.append("robustness unavailable: the pt formula has a future-time function")
         return
-    if (rob.value < 0) == holds:
+    # the message that decided the tick: the newest held among the clock's topics
+    at = _Ticks(res, list(res.log_times.values()), bindings).point(rob.tick)
+    _robustness_fields(v, holds, rob.value, at, _margin_points(rob, res.times))
+
+
+def _robustness_fields(v, holds: bool, value: float, at: TimePoint,
+                       points: list[tuple[int, int, float]]) -> None:
+    """``v.robustness`` (``value``), ``v.robustness_at`` (``at``) and ``v.margin``
+    (``points``), unless the value's sign disagrees with the verdict or it is a
+    violation's ``-TINY`` (notes say so; :func:`_robustness`)."""
+    if (value < 0) == holds:
         v.notes.append(f"robustness unavailable: its sign disagrees with the verdict "
-                       f"({rob.value!r})")
+                       f"({value!r})")
         return
-    if rob.value == -TINY:
+    if value == -TINY:
         v.notes.append("robustness: none: the violation is decided at distance 0 from its "
                        "threshold (an `!=` met by equality, a strict comparison met at its "
                        "threshold, or a comparison with NaN), where a margin tells no "
                        "distance")
         return
-    v.robustness = rob.value + 0.0  # never -0.0: its sign is the verdict's
-    # the message that decided the tick: the newest held among the clock's topics
-    v.robustness_at = _Ticks(res, list(res.log_times.values()), bindings).point(rob.tick)
-    m, times = rob.margin, res.times
-    ticks: Sequence[int]
-    if len(m) <= MARGIN_POINTS:
-        ticks = range(len(m))
-    else:  # the least value of each run of consecutive ticks
-        edges = np.linspace(0, len(m), MARGIN_POINTS + 1).astype(int)
-        ticks = [int(a + np.argmin(m[a:b])) for a, b in zip(edges[:-1], edges[1:])]
-    v.margin = [(int(i), int(times[i]), float(m[i])) for i in ticks]
+    v.robustness = value + 0.0  # never -0.0: its sign is the verdict's
+    v.robustness_at = at
+    v.margin = points
 
 
-def _violation_evidence(plan: AuditPlan, r: RequirementPlan, res: ClockPass,
-                        bindings: Bindings | None, v, ev, status: str,
-                        st_tick: int | None) -> None:
-    """The first violation of a violated requirement, and the values and message log times
-    ``plan.config.window`` ticks around its trigger and violation."""
-    n = len(res.times)
+def _margin_points(rob, times: np.ndarray) -> list[tuple[int, int, float]]:
+    """The margin points of the robustness ``rob`` over ticks at ``times``: (tick, time,
+    margin) at the ticks shown (``v.margin``): every tick, or the least of each run of
+    ticks (:func:`fretc.monitors.robustness.margin_ticks`)."""
+    m = rob.margin
+    return [(i, int(times[i]), float(m[i])) for i in margin_ticks(m, MARGIN_POINTS)]
+
+
+def _first_violation(r: RequirementPlan, v, ev, status: str, st_tick: int | None, n: int,
+                     ticks: _Ticks | StreamTicks) -> None:
+    """The first violation of a violated requirement (``v.first_violation``) and the
+    violations listed (``v.violation_list``), over its ``n`` ticks (``ticks``)."""
     assert r.requirement is not None and r.formalization is not None  # (judged: formalized)
     scope_kind = r.requirement.scope.kind
     timing = r.requirement.timing.kind
     obligation = OBLIGATIONS.get(timing, ("", ""))[1 if scope_kind.startswith("only") else 0]
     k = r.formalization.ticks
-    ticks = _own_ticks(r, res, bindings)
     tp = ticks.point
     if ev is not None and ev.violation is not None:
         w = ev.violation
@@ -421,25 +482,32 @@ def _violation_evidence(plan: AuditPlan, r: RequirementPlan, res: ClockPass,
                                              ticks.time_at(w.window[1])),
             obligation=obligation.replace("t+k", f"t+{k}") if k is not None else obligation,
             reason=w.reason)
-        centres = [w.trigger_tick, vt]
         v.violation_list = [(tp(x.trigger_tick), tp(min(x.violation_tick, n - 1)))
                             for x in ev.listed]
     else:
         vt = st_tick if (status == "violated" and st_tick is not None) else n - 1
         fv = FirstViolation(at=tp(vt), obligation=obligation,
                             reason="the monitor's verdict (no interval evidence)")
-        centres = [vt]
     v.first_violation = fv
-    _values_around(plan.config.window, r, res, bindings, v, centres)
+
+
+def shown_ticks(window: int, v: Verdict, n: int) -> list[int]:
+    """The ticks (of ``n``) whose values a violation's evidence shows: those within
+    ``window`` of its first violation's trigger and of the tick it was missed at
+    (``v.first_violation``), ascending."""
+    fv = v.first_violation
+    assert fv is not None  # (a violation's evidence is set before its values)
+    centres = [fv.at.tick] if fv.trigger is None else [fv.trigger.tick, fv.at.tick]
+    return sorted({i for c in centres for i in range(c - window, c + window + 1)
+                   if 0 <= i < n})
 
 
 def _values_around(window: int, r: RequirementPlan, res: ClockPass, bindings: Bindings | None,
-                   v, centres: list[int]) -> None:
+                   v) -> None:
     """``v.values`` and ``v.sources``: the requirement's variables and its topics' held log
-    times at the ticks within ``window`` of each centre."""
-    n, times = len(res.times), res.times
-    ticks = sorted({i for c in centres for i in range(c - window, c + window + 1)
-                    if 0 <= i < n})
+    times at the ticks within ``window`` of its first violation (:func:`shown_ticks`)."""
+    times = res.times
+    ticks = shown_ticks(window, v, len(times))
     for name in r.variables:
         col = res.columns.get(name)
         if col is None:

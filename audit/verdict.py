@@ -236,13 +236,19 @@ class Verdict:
             the unit of the comparison that decides it, negative exactly when violated,
             ``+-inf`` when a boolean decides it; None when ``unknown``, ``error``, or the pt
             formula cannot be evaluated over columns (a note says why).
-        robustness_at: the first tick where the margin is that small.
+        robustness_at: the tick where the margin that decides the verdict was reached
+            (:class:`fretc.monitors.robustness.Robustness`'s ``tick``): where the pt
+            formula is ``H`` of what must hold at every tick (most requirements without a
+            scope) the first tick where the margin is that small, else the first tick since
+            which the margin has held its final value.
         unknown_ticks: ticks of this requirement's clock at which something it reads is
             unknown (a gap of the log, a comparison with NaN): judged in three-valued
             semantics (:mod:`fretc.audit.unknown_ticks`).
         margin: the margin over time, ``[(tick, time_ns, value)]``: every tick, or on a
-            long log the least value of each of :data:`MARGIN_POINTS` runs of consecutive
-            ticks (at the tick where it occurs), so no dip is lost.
+            long log the least value (at the first tick where it occurs) of each run of
+            ``B`` consecutive ticks from tick 0, ``B`` the least power of two that makes at
+            most :data:`MARGIN_POINTS` runs (:func:`fretc.monitors.robustness.margin_ticks`:
+            kept a chunk of ticks at a time), so no dip is lost.
         trials: for a requirement with a probability bound, its triggers on this log as
             trials (:class:`fretc.audit.trials.Trials`: satisfied, violated, and the cut and
             unknown ones that are no trials); None for the others, and when it was not

@@ -18,7 +18,8 @@ The audit (and a watch at the end of its run) asks :func:`judge` and nothing els
   formula ft_inf) comes from the requirement's deterministic monitor automata run over the
   columns (:func:`ltl3_verdict`), or from the generated monitor
   replayed when its automata have no tables. A requirement without an online monitor (a
-  future-time function in its pt formula) has none: ``"unknown"``.
+  future-time function in its pt formula) has none: ``"unknown"``. :class:`Ltl3Stream`
+  gives the same verdict over a trace fed a chunk of ticks at a time.
 
 The generated monitors themselves are for ``--emit monitor`` and ``fretc watch``; the tests
 cross-check them, the vectorized pt engine and this judge on random traces.
@@ -34,16 +35,18 @@ import numpy as np
 
 from fretc.monitors import stepwise
 from fretc.monitors.interval import Evidence, EvidenceUnsupported, evaluate_requirement
-from fretc.monitors.robustness import Robustness, robustness
-from fretc.monitors.vectorized import VectorizeError, atom_letters, pt_series, supports
+from fretc.monitors.robustness import Robustness, chunkable, past_truth, robustness, stateful
+from fretc.monitors.vectorized import (VectorizeError, atom_letters, node_series, pt_series,
+                                       supports)
 from fretc.monitors.nan import nan_ticks_of
 
 if TYPE_CHECKING:
+    from fretc.compiler.ir import Node
     from fretc.fretish import ast as A
     from fretc.compiler.semantics import Formalization
     from fretc.compiler.codegen import MonitorSource
 
-__all__ = ["Judgement", "judge", "ltl3_verdict", "ltl3_verdicts", "nan_ticks"]
+__all__ = ["Judgement", "Ltl3Stream", "judge", "ltl3_verdict", "ltl3_verdicts", "nan_ticks"]
 
 
 @dataclass
@@ -182,19 +185,26 @@ def ltl3_verdict(monitor_source: MonitorSource, columns: Mapping[str, np.ndarray
     return best
 
 
-#: letters read into Python at a time by :func:`_first_rejection`
+#: letters read into Python at a time by :func:`_advance`
 _LETTERS_CHUNK = 1 << 16
 
 
 def _first_rejection(table, state: int, letters: np.ndarray) -> int | None:
     """The first tick at which the automaton ``table`` from ``state`` rejects over
     ``letters``, or None (read a chunk at a time: no list of every letter)."""
+    return _advance(table, state, letters)[1]
+
+
+def _advance(table, state: int, letters: np.ndarray) -> tuple[int, int | None]:
+    """The automaton ``table`` (``table[state][letter]``, negative: rejected) run from
+    ``state`` over ``letters``: ``(state, None)`` after the last letter, or ``(rejecting
+    state, index)`` at the first rejection (the letters read a chunk at a time)."""
     for lo in range(0, len(letters), _LETTERS_CHUNK):
         for i, letter in enumerate(letters[lo:lo + _LETTERS_CHUNK].tolist(), lo):
             state = table[state][letter]
             if state < 0:
-                return i
-    return None
+                return state, i
+    return state, None
 
 
 def ltl3_verdicts(monitor_source: MonitorSource, columns: Mapping[str, np.ndarray], n: int,
@@ -228,6 +238,111 @@ def ltl3_verdicts(monitor_source: MonitorSource, columns: Mapping[str, np.ndarra
             if seen is None or hit < seen:  # (the earlier automaton's on a tie)
                 best[e] = (outcome, hit)
     return best
+
+
+class Ltl3Stream:
+    """:func:`ltl3_verdict` over a trace fed a chunk of ticks at a time (the LTL3 verdict of
+    Bauer, Leucker, Schallhart, TOSEM 2011: the earliest tick after which every
+    continuation satisfies, or every one violates, ft_inf), and the time of its tick.
+
+    Each live automaton (``bad``: rejection means *violated*; ``good``: *satisfied*) keeps
+    its state from chunk to chunk and stops at its first rejection; the verdict is the
+    earlier rejection (``bad``'s on a tie), as :func:`ltl3_verdict` decides it. An atom
+    whose value depends on earlier ticks (a past-time function, ``FTP``) is evaluated with
+    its temporal operators' state carried (:func:`fretc.monitors.robustness.past_truth`).
+    Memory: the letters and atoms of one chunk, and per atom its operators' state (a
+    bounded window's last ticks): independent of the trace's length.
+    """
+
+    def __init__(self, monitor_source: MonitorSource) -> None:
+        """Raises:
+            VectorizeError: as :func:`ltl3_verdict` (an automaton with condition chains,
+                too many atoms to tabulate: use the step-wise monitor), or a live
+                automaton's atom that cannot be evaluated a chunk at a time (a future-time
+                operator, a comparison over a past-time operator or ``pre``)."""
+        ms = monitor_source
+        bad, good = ms.bad, ms.good
+        self.decided: str | None = None  # definite before any tick
+        if bad is not None and bad.empty:
+            self.decided = "violated"
+        elif good is not None and good.empty:
+            self.decided = "satisfied"
+        live = [] if self.decided else [
+            (aut, outcome) for aut, outcome in ((bad, "violated"), (good, "satisfied"))
+            if aut is not None and not aut.complete]
+        self.live: list[_Running] = []
+        for aut, outcome in live:
+            if aut.table is None:
+                raise VectorizeError("automaton with condition chains (too many atoms to "
+                                     "tabulate): use the step-wise monitor")
+            self.live.append(_Running(aut.table, aut.initial, tuple(aut.atoms), outcome))
+        #: each atom depending on earlier ticks -> its temporal operators' state
+        self.carry: dict[Node, dict] = {}
+        for run in self.live:
+            for atom in run.atoms:
+                if not supports(atom) or (stateful(atom) and not chunkable(atom)):
+                    raise VectorizeError(f"atom {atom} cannot be evaluated a chunk at a time "
+                                         "(a future-time operator, or a comparison over a "
+                                         "past-time value)")
+                if stateful(atom):
+                    self.carry[atom] = {}
+        self.start = 0  # ticks fed
+
+    def feed(self, columns: Mapping[str, np.ndarray], k: int, times: np.ndarray) -> None:
+        """The next ``k >= 0`` ticks: ``columns`` FRET variable -> a 1-D array whose first
+        ``k`` values are these ticks' (as :func:`ltl3_verdict` reads them), ``times``
+        their times (int64 ns, at least ``k``).
+
+        Raises:
+            VectorizeError: a column missing or shorter than ``k``."""
+        running = [run for run in self.live if run.hit is None]
+        if k > 0 and running:
+            window = {name: np.asarray(col)[:k] for name, col in columns.items()}
+            past = {atom: past_truth(atom, window, k, self.start, self.carry[atom])
+                    for atom in {a for run in running for a in run.atoms if a in self.carry}}
+            for run in running:
+                letters = (_letters(run.atoms, window, k, past) if past
+                           else atom_letters(run.atoms, window, k))
+                run.state, hit = _advance(run.table, run.state, letters)
+                if hit is not None:
+                    run.hit, run.hit_time = self.start + hit, int(times[hit])
+        self.start += max(k, 0)
+
+    def finish(self) -> tuple[str, int | None, int | None]:
+        """``(verdict, tick, time)``: :func:`ltl3_verdict`'s verdict and tick over the ticks
+        fed, and the time of the tick (ns, as fed; None with the tick)."""
+        if self.decided is not None:
+            return self.decided, None, None
+        best: tuple[str, int | None, int | None] = ("unknown", None, None)
+        for run in self.live:
+            if run.hit is not None and (best[1] is None or run.hit < best[1]):
+                best = (run.outcome, run.hit, run.hit_time)
+        return best
+
+
+@dataclass
+class _Running:
+    """One live automaton of an :class:`Ltl3Stream`: its table, state, atoms, what its
+    rejection means, and the tick and time of its first rejection (None: none yet)."""
+
+    table: list[list[int]]
+    state: int
+    atoms: tuple[Node, ...]
+    outcome: str
+    hit: int | None = None
+    hit_time: int | None = None
+
+
+def _letters(atoms: tuple[Node, ...], columns: Mapping[str, np.ndarray], k: int,
+             past: dict[Node, np.ndarray]) -> np.ndarray:
+    """:func:`atom_letters` of one chunk, the atoms that depend on earlier ticks read from
+    ``past`` (their truths over the chunk), the others evaluated over the chunk."""
+    dtype = np.dtype(np.uint16 if len(atoms) <= 16 else np.int64)
+    out = np.zeros(k, dtype)
+    for j, atom in enumerate(atoms):
+        truth = past[atom] if atom in past else node_series(atom, columns, k)
+        np.bitwise_or(out, np.left_shift(truth.astype(dtype), j, dtype=dtype), out=out)
+    return out
 
 
 #: Traces stepped together by :func:`first_rejections` while at least this many are still

@@ -31,6 +31,11 @@ truth value is true, so the requirement's robustness is negative exactly when it
 A boolean FRET variable has no distance: ``+-inf`` says "decided by a boolean, no margin".
 A vacuous verdict has a value ``>= 0``: the margin by which the scope or condition stayed
 away (``+inf`` when they are boolean).
+
+:func:`robustness` evaluates a whole trace's columns; :class:`RobustnessStream` the same
+formula over a trace fed a chunk of ticks at a time (memory independent of its length),
+keeping what the audit reports: the value, its tick (:class:`Robustness`) and the margin at
+:func:`margin_ticks`' ticks, the same bits.
 """
 
 from __future__ import annotations
@@ -48,8 +53,9 @@ from fretc.monitors.vectorized import VectorizeError, node_series
 
 _FUTURE = ("X", "F", "G", "U", "V", "LAST", "future")
 
-__all__ = ["Robustness", "TINY", "robustness", "robustness_of_traces", "robustness_columns",
-           "robustness_series"]
+__all__ = ["Robustness", "RobustnessStream", "RobustnessSummary", "TINY", "chunkable",
+           "margin_ticks", "past_truth", "robustness", "robustness_of_traces",
+           "robustness_columns", "robustness_series", "stateful"]
 
 #: The smallest positive double: ``-TINY`` is the robustness of a comparison false at
 #: distance 0 (the module docstring's sign convention).
@@ -67,8 +73,14 @@ class Robustness:
         value: the robustness of the pt formula at the last tick (the whole trace), in the
             unit of the comparison that decides it; ``+-inf`` when a boolean decides it.
             Negative exactly when FRET's finite-trace verdict is false.
-        tick: the first 0-based tick whose margin equals ``value`` (where the trace came
-            closest to violating, or violated).
+        tick: the 0-based tick where the margin that decides the verdict was reached (0
+            when ``value`` is NaN). For a pt formula whose top is an unbounded ``H`` (the
+            value is the least margin) the first tick whose margin equals ``value`` (where
+            the trace came closest to violating, or violated most); for any other pt
+            formula (the value is the margin at the last tick) the first tick of the last
+            run of consecutive ticks whose margin equals ``value``: the tick since which
+            the margin has held its final value. Both are a running reading of the margin
+            (:class:`RobustnessStream` keeps them a chunk of ticks at a time).
         margin: float array ``(n,)``, the margin at every tick: the robustness of the body of
             a top-level ``H`` (what must hold at every tick), else of the pt formula at that
             tick.
@@ -87,9 +99,12 @@ ROBUSTNESS_CHUNK = 1 << 16
 
 def robustness(pt: Node, columns: Columns, n: int, chunk: int | None = None) -> Robustness:
     """The robustness of the pt formula ``pt`` over ticks ``0..n-1`` (``n >= 1``), evaluated
-    ``chunk`` ticks (default :data:`ROBUSTNESS_CHUNK`) at a time when ``n`` is longer (the same values: each temporal
-    operator's state carried from chunk to chunk) unless a comparison's operands hold a
-    past-time operator or ``pre`` (then over the whole trace at once).
+    ``chunk`` ticks (default :data:`ROBUSTNESS_CHUNK`) at a time when ``n`` is longer (the
+    same values: each temporal operator's state carried from chunk to chunk) unless a
+    comparison's operands hold a past-time operator or ``pre`` (then over the whole trace at
+    once). The value and tick are :class:`Robustness`'s (Donze, Maler, FORMATS 2010: the
+    space robustness of the pt formula at the last tick, or of a top ``H``'s body at its
+    least); :class:`RobustnessStream` gives the same a chunk of ticks at a time.
 
     Raises:
         VectorizeError: a future-time operator or function in ``pt``, or a missing or
@@ -108,9 +123,27 @@ def robustness(pt: Node, columns: Columns, n: int, chunk: int | None = None) -> 
             margin[a:b] = _Rho(_Window(columns, a, b), b - a, body, a, carry).rho(body)
     else:
         margin = _Rho(columns, n, body).rho(body)
-    value = float(margin.min()) if top else float(margin[-1])
-    tick = int(np.argmax(margin == value))  # the first tick at the value
+    value, tick = _decisive(margin, top)
     return Robustness(value, tick, margin)
+
+
+def _decisive(margin: np.ndarray, top: bool) -> tuple[float, int]:
+    """The value and tick of a margin (``(n,)``, ``n >= 1``) as :class:`Robustness` defines
+    them: ``top`` (an unbounded ``H`` on top) the least margin and the first tick at it
+    (the value that tick's bits: of ``0.0`` and ``-0.0`` the first met), else the last
+    tick's margin and the first tick of the last run of ticks at it."""
+    if top:
+        least = margin.min()
+        if least != least:  # (NaN: no tick equals it)
+            return float(least), 0
+        tick = int(np.argmax(margin == least))
+        return float(margin[tick]), tick
+    value = float(margin[-1])
+    if value != value:
+        return value, 0
+    differs = margin[::-1] != value  # (from the last tick back)
+    back = int(np.argmax(differs))
+    return value, (len(margin) - back) if differs[back] else 0
 
 
 #: operators :class:`_Rho` evaluates itself (carrying their state from chunk to chunk);
@@ -174,9 +207,9 @@ def robustness_columns(pt: Node, columns: Columns, firsts: np.ndarray, lengths: 
                        ) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
     """:func:`robustness_of_traces` as columns: ``(margin, values, ticks)``, the margin of
     every tick of the traces laid end to end (float array of ``lengths.sum()``), and per
-    trace its value and the first 0-based tick of the trace at that value (``0`` when none
-    equals it: a NaN value), as :class:`Robustness` has them for one trace. None when
-    :func:`robustness_of_traces` gives None.
+    trace its value and tick (0-based in the trace; ``0`` when the value is NaN) as
+    :class:`Robustness` defines them for one trace. None when :func:`robustness_of_traces`
+    gives None.
 
     Raises:
         VectorizeError: as :func:`robustness`."""
@@ -186,12 +219,19 @@ def robustness_columns(pt: Node, columns: Columns, firsts: np.ndarray, lengths: 
     if n > ROBUSTNESS_CHUNK or not _chunkable(body, 1 << 62):  # (any window: no chunks)
         return None
     margin = _Traces(columns, n, body, np.repeat(firsts, lengths)).rho(body)
-    values = (np.minimum.reduceat(margin, firsts) if top else margin[firsts + lengths - 1])
     trace = np.repeat(np.arange(len(firsts), dtype=np.int64), lengths)
-    far = np.iinfo(np.int64).max
-    at = np.where(margin == values[trace], np.arange(n, dtype=np.int64) - firsts[trace], far)
-    ticks = np.minimum.reduceat(at, firsts)
-    ticks[ticks == far] = 0  # (np.argmax of no hit, as robustness() has it)
+    local = np.arange(n, dtype=np.int64) - firsts[trace]  # (each tick's, in its trace)
+    if top:  # the least, at its first tick (the value that tick's bits, as _decisive)
+        values = np.minimum.reduceat(margin, firsts)
+        far = np.iinfo(np.int64).max
+        ticks = np.minimum.reduceat(np.where(margin == values[trace], local, far), firsts)
+        found = ticks != far
+        ticks[~found] = 0  # (NaN: no tick equals it)
+        values[found] = margin[(firsts + ticks)[found]]
+    else:  # the last tick's, from the tick after the last one that differs from it
+        values = margin[firsts + lengths - 1]
+        ticks = np.maximum.reduceat(np.where(margin != values[trace], local + 1, 0), firsts)
+        ticks[np.isnan(values)] = 0
     return margin, values, ticks
 
 
@@ -202,6 +242,346 @@ def robustness_series(node: Node, columns: Columns, n: int) -> np.ndarray:
         VectorizeError: as :func:`robustness`.
     """
     return _Rho(columns, n, node).rho(node)
+
+
+def past_truth(node: Node, columns: Columns, k: int, start: int, carry: dict) -> np.ndarray:
+    """The truth (bool array ``(k,)``) of the past-time formula ``node`` at the ticks
+    ``start..start+k-1`` (``k >= 1``) of a trace fed a chunk at a time: the sign of its
+    robustness (``>= 0`` exactly where true, the module docstring's induction), each
+    temporal operator's state carried in ``carry`` (one dict per formula, empty at tick 0,
+    given again with the next chunk). Equal to
+    :func:`fretc.monitors.vectorized.node_series` over the whole trace (by test) where
+    :func:`chunkable` says so.
+
+    Raises:
+        VectorizeError: as :func:`robustness`."""
+    return _Rho(columns, k, node, start, carry).rho(node) >= 0
+
+
+def chunkable(node: Node) -> bool:
+    """Whether the past-time formula ``node`` can be evaluated a chunk of ticks at a time
+    (:func:`past_truth`, :class:`RobustnessStream`): no comparison, arithmetic or call of
+    it reads a past-time operator or ``pre`` (bounded windows of any length)."""
+    return _chunkable(node, 1 << 62)
+
+
+def stateful(node: Node) -> bool:
+    """Whether ``node``'s value at a tick depends on earlier ticks (a past-time operator,
+    ``pre``, ``FTP`` in it)."""
+    return any(x.op in _STATEFUL for x in walk(node))
+
+
+def margin_ticks(margin: np.ndarray, points: int) -> list[int]:
+    """The ticks (ascending) the audit reports the margin at: the ticks cut into runs of
+    ``B`` consecutive ticks from tick 0, ``B`` the least power of two with ``ceil(n / B) <=
+    points`` (``B = 1``, every tick, when ``n <= points``), and of each run the tick of its
+    least value, the first at ties (NaN counts as least, as ``np.argmin``). A power of two
+    from tick 0 so that a stream keeps them without knowing ``n`` (:class:`_MarginRuns`:
+    two runs merge into one when the ticks outgrow ``points`` runs). At most ``points``
+    ticks, so no dip of the margin is lost.
+
+    Args:
+        margin: float array ``(n,)``.
+        points: the most ticks given (``>= 1``)."""
+    n, size = len(margin), _run_size(len(margin), points)
+    if size == 1:
+        return list(range(n))
+    whole = n - n % size
+    ticks = (np.argmin(margin[:whole].reshape(-1, size), axis=1)
+             + np.arange(0, whole, size, dtype=np.int64)).tolist()
+    if whole < n:
+        ticks.append(whole + int(np.argmin(margin[whole:])))
+    return ticks
+
+
+def _run_size(n: int, points: int) -> int:
+    """:func:`margin_ticks`' ``B`` for ``n`` ticks."""
+    if points < 1:
+        raise ValueError(f"margin points must be at least 1, not {points}")
+    size = 1
+    while -(-n // size) > points:
+        size *= 2
+    return size
+
+
+class _MarginRuns:
+    """:func:`margin_ticks` of a margin fed a chunk at a time, with each tick's time and
+    value: per run of ``size`` ticks (run ``j`` from tick ``j * size``) the least value,
+    its tick and time; when the ticks would need more than ``points`` runs, runs ``2j``
+    and ``2j + 1`` merge into run ``j`` of twice the size. Memory: three arrays of at most
+    ``points`` runs, and one chunk's while it is added."""
+
+    def __init__(self, points: int) -> None:
+        self.points, self.size = points, _run_size(0, points)
+        self.values: np.ndarray = np.empty(0, np.float64)
+        self.ticks: np.ndarray = np.empty(0, np.int64)
+        self.times: np.ndarray = np.empty(0, np.int64)
+
+    def add(self, margin: np.ndarray, start: int, times: np.ndarray) -> None:
+        """The margin (float ``(k,)``) and times (int64 ns ``(k,)``) of ticks
+        ``start..start+k-1``, ``start`` the ticks added before."""
+        end = start + len(margin)
+        while -(-end // self.size) > self.points:
+            self._merge_pairs()
+        size, at = self.size, 0
+        if start % size:  # the rest of the last run, begun by the chunk before
+            at = min(len(margin), size - start % size)
+            i = int(np.argmin(margin[:at]))
+            self._append(margin[i:i + 1], np.array([start + i], np.int64), times[i:i + 1])
+            self._merge_last()
+        whole = at + (len(margin) - at) // size * size
+        if whole > at:
+            i = np.argmin(margin[at:whole].reshape(-1, size), axis=1) + np.arange(
+                at, whole, size, dtype=np.int64)
+            self._append(margin[i], start + i, times[i])
+        if whole < len(margin):
+            i = whole + int(np.argmin(margin[whole:]))
+            self._append(margin[i:i + 1], np.array([start + i], np.int64), times[i:i + 1])
+
+    def _append(self, values: np.ndarray, ticks: np.ndarray, times: np.ndarray) -> None:
+        self.values = np.concatenate((self.values, values))
+        self.ticks = np.concatenate((self.ticks, ticks))
+        self.times = np.concatenate((self.times, np.asarray(times, np.int64)))
+
+    @staticmethod
+    def _later(first: np.ndarray, second: np.ndarray) -> np.ndarray:
+        """Where the later of two runs holds the least of both (``np.argmin``'s choice:
+        the first NaN, else the first least)."""
+        return (second < first) | (np.isnan(second) & ~np.isnan(first))
+
+    def _merge_last(self) -> None:
+        """The last two entries as one run (the rest of a run added to its beginning)."""
+        drop = -2 if self._later(self.values[-2:-1], self.values[-1:])[0] else -1
+        self.values = np.delete(self.values, drop)
+        self.ticks = np.delete(self.ticks, drop)
+        self.times = np.delete(self.times, drop)
+
+    def _merge_pairs(self) -> None:
+        """Runs ``2j`` and ``2j + 1`` as run ``j`` of twice the size."""
+        even = len(self.values) - len(self.values) % 2
+        take = self._later(self.values[0:even:2], self.values[1:even:2])
+
+        def merged(x: np.ndarray) -> np.ndarray:
+            return np.concatenate((np.where(take, x[1:even:2], x[0:even:2]), x[even:]))
+
+        self.values, self.ticks, self.times = (merged(self.values), merged(self.ticks),
+                                               merged(self.times))
+        self.size *= 2
+
+    def points_list(self) -> list[tuple[int, int, float]]:
+        """``[(tick, time_ns, value)]`` of the runs, ascending."""
+        return list(zip(self.ticks.tolist(), self.times.tolist(), self.values.tolist()))
+
+
+@dataclass(frozen=True)
+class RobustnessSummary:
+    """What :class:`RobustnessStream` keeps of a requirement's robustness on one trace.
+
+    Attributes:
+        value: :attr:`Robustness.value`.
+        tick: :attr:`Robustness.tick` (0-based).
+        tick_time: the time of that tick (int ns, as the fed ``times``).
+        points: the margin at :func:`margin_ticks`' ticks, ``[(tick, time_ns, value)]``
+            ascending: ``[(i, times[i], margin[i]) for i in margin_ticks(margin, points)]``.
+    """
+
+    value: float
+    tick: int
+    tick_time: int
+    points: list[tuple[int, int, float]]
+
+
+class _Recorder(Mapping):
+    """Columns that record the names read (each a tick of zeros)."""
+
+    def __init__(self) -> None:
+        self.names: list[str] = []
+
+    def __getitem__(self, name: str) -> np.ndarray:
+        if name not in self.names:
+            self.names.append(name)
+        return np.zeros(1, np.float64)
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self.names)
+
+    def __len__(self) -> int:
+        return len(self.names)
+
+
+def _columns_read(node: Node) -> list[str]:
+    """The columns the evaluation of the past-time formula ``node`` reads (found by
+    evaluating it over one tick of zeros)."""
+    rec = _Recorder()
+    with np.errstate(all="ignore"):
+        _Rho(rec, 1, node).rho(node)
+    return rec.names
+
+
+class RobustnessStream:
+    """:func:`robustness` of a pt formula over a trace fed a chunk of ticks at a time
+    (Donze, Maler, FORMATS 2010's space robustness, the module docstring's table), kept as
+    a :class:`RobustnessSummary`: the value and tick :func:`robustness` gives over the whole
+    trace, and the margin at :func:`margin_ticks`' ticks, the same bits.
+
+    The fed ticks are buffered into blocks of ``chunk`` ticks (default
+    :data:`ROBUSTNESS_CHUNK`), each evaluated as :func:`robustness` evaluates its chunks
+    (each temporal operator's state carried to the next block), so the margins are the
+    same floats. Memory: the formula's columns over one block and a few float arrays of
+    it, and three arrays of at most ``points`` runs (:class:`_MarginRuns`): independent of
+    the trace's length.
+
+    A column may change dtype from chunk to chunk (a boolean read as ``bool``, ``uint8``
+    0/1 or ``float64`` 0/1: a CSV reader decides a column's type at the end of the file):
+    a block holds the common type of its pieces (``np.result_type``), which reads as the
+    same truth (``bool(x)``) and the same number.
+    """
+
+    def __init__(self, pt: Node, points: int, chunk: int | None = None) -> None:
+        """Args:
+            pt: the requirement's pt formula.
+            points: the most margin points kept (``>= 1``, the audit's ``MARGIN_POINTS``).
+            chunk: ticks per block (:func:`robustness`'s ``chunk``).
+
+        Raises:
+            VectorizeError: the formula cannot be evaluated a chunk at a time: a
+                future-time operator or function, a comparison, arithmetic or call over a
+                past-time operator or ``pre``, or a bounded window longer than ``chunk``.
+            ValueError: ``points < 1``.
+        """
+        self.chunk = ROBUSTNESS_CHUNK if chunk is None else chunk
+        self.top = pt.op == "H" and pt.hi is None
+        self.body = pt.args[0] if self.top else pt
+        if any(x.op in _FUTURE for x in walk(self.body)):
+            raise VectorizeError("future-time operator or function in a past-time formula")
+        if not _chunkable(self.body, self.chunk):
+            raise VectorizeError("the pt formula compares a past-time value, or has a window "
+                                 f"longer than {self.chunk} ticks: not a chunk at a time")
+        self.names = _columns_read(self.body)
+        self.runs = _MarginRuns(points)
+        self.carry: dict[Node, object] = {}
+        self.blocks: dict[str, np.ndarray] = {}  # name -> the block's values (``chunk``)
+        self.times = np.empty(self.chunk, np.int64)
+        self.fill = 0  # ticks in the block
+        self.start = 0  # the trace's tick of the block's first
+        self.first_time = 0  # the time of tick 0
+        #: the value so far (NaN before a tick), its tick (None before) and that tick's time
+        self.value = math.nan
+        self.tick: int | None = None
+        self.tick_time = 0
+        self.done: RobustnessSummary | None = None
+
+    def feed(self, columns: Columns, k: int, times: np.ndarray) -> None:
+        """The next ``k >= 0`` ticks: ``columns`` every column the formula reads (FRET
+        variable, or the text of an uninterpreted call -> a 1-D array whose first ``k``
+        values are these ticks'), ``times`` their times (int64 ns, at least ``k``).
+
+        Raises:
+            VectorizeError: a column missing or shorter than ``k``.
+            ValueError: fed after :meth:`finish`.
+        """
+        if self.done is not None:
+            raise ValueError("the robustness stream was finished")
+        if k <= 0:
+            return
+        pieces = {name: _piece(columns, name, k) for name in self.names}
+        times = np.asarray(times)[:k]
+        if len(times) != k:
+            raise VectorizeError(f"{len(times)} times for {k} ticks")
+        at = 0
+        while at < k:
+            take = min(k - at, self.chunk - self.fill)
+            for name, piece in pieces.items():
+                self._put(name, piece[at:at + take])
+            self.times[self.fill:self.fill + take] = times[at:at + take]
+            self.fill += take
+            at += take
+            if self.fill == self.chunk:
+                self._evaluate()
+
+    def finish(self) -> RobustnessSummary:
+        """The summary of the ticks fed (the block begun evaluated); the same on every call.
+
+        Raises:
+            ValueError: no tick was fed (:func:`robustness` needs one).
+        """
+        if self.done is None:
+            if self.fill:
+                self._evaluate()
+            if self.start == 0:
+                raise ValueError("robustness needs at least one tick")
+            if self.value != self.value:  # (NaN: no tick equals it, tick 0 as robustness())
+                self.tick, self.tick_time = 0, self.first_time
+            assert self.tick is not None  # (a value not NaN was met at a tick)
+            self.done = RobustnessSummary(self.value, self.tick, self.tick_time,
+                                          self.runs.points_list())
+            self.blocks = {}
+        return self.done
+
+    def _put(self, name: str, piece: np.ndarray) -> None:
+        """``piece`` into the block of ``name`` from :attr:`fill` (the block widened to the
+        common type when the piece's differs)."""
+        block = self.blocks.get(name)
+        if block is None:
+            block = self.blocks[name] = np.empty(self.chunk, piece.dtype)
+        elif block.dtype != piece.dtype:
+            common = np.result_type(block.dtype, piece.dtype)
+            if common != block.dtype:
+                block = self.blocks[name] = block.astype(common)
+        block[self.fill:self.fill + len(piece)] = piece
+
+    def _evaluate(self) -> None:
+        """The margin of the block (as :func:`robustness` evaluates a chunk), read into the
+        value, tick and margin points; the block emptied."""
+        k, a = self.fill, self.start
+        columns = {name: block[:k] for name, block in self.blocks.items()}
+        margin = _Rho(columns, k, self.body, a, self.carry).rho(self.body)
+        times = self.times[:k]
+        if a == 0:
+            self.first_time = int(times[0])
+        if self.top:
+            self._least(margin, a, times)
+        else:
+            self._last_run(margin, a, times)
+        self.runs.add(margin, a, times)
+        self.start, self.fill = a + k, 0
+
+    def _least(self, margin: np.ndarray, a: int, times: np.ndarray) -> None:
+        """A top ``H``: the least margin so far at its first tick (NaN: stays NaN)."""
+        least = margin.min()
+        if least != least:
+            self.value, self.tick = math.nan, 0
+        elif self.tick is None or least < self.value:  # (False once NaN)
+            i = int(np.argmax(margin == least))
+            self.value, self.tick, self.tick_time = float(margin[i]), a + i, int(times[i])
+
+    def _last_run(self, margin: np.ndarray, a: int, times: np.ndarray) -> None:
+        """Any other pt formula: the last tick's margin, and the first tick of the last
+        run of ticks at it (a run the block before began continues)."""
+        value = float(margin[-1])
+        differs = margin[::-1] != value
+        back = int(np.argmax(differs))
+        if not differs[back]:  # (the whole block at it: the run goes on, or begins here)
+            if self.tick is None or not self.value == value:
+                self.tick, self.tick_time = a, int(times[0])
+        elif back:  # (back 0: the value NaN, which differs from itself: no tick)
+            i = len(margin) - back
+            self.tick, self.tick_time = a + i, int(times[i])
+        self.value = value
+
+
+def _piece(columns: Columns, name: str, k: int) -> np.ndarray:
+    """The first ``k`` values of column ``name`` (1-D).
+
+    Raises:
+        VectorizeError: no such column, or fewer values."""
+    col = columns.get(name)
+    if col is None:
+        raise VectorizeError(f"no column for variable {name!r}")
+    col = np.asarray(col)
+    if col.ndim != 1 or len(col) < k:
+        raise VectorizeError(f"column {name!r} has shape {col.shape}, expected ({k},)")
+    return col[:k]
 
 
 def _neg(x: np.ndarray) -> np.ndarray:

@@ -19,13 +19,13 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
 
 from fretc.audit.finalize import vacuous_note
 from fretc.audit.verdict import MARGIN_POINTS, NO_EVIDENCE, Ltl3, TimePoint, Verdict
+from fretc.monitors.robustness import margin_ticks
 
 __all__ = ["EntityBlock", "EntityVerdict", "LTL3_STATUS"]
 
@@ -199,19 +199,14 @@ class EntityBlock:
 
     def _f_margin(self, k: int) -> list[tuple[int, int, float]]:
         """The margin over time as :func:`fretc.audit.finalize` gives it (every tick, or the
-        least of each of :data:`MARGIN_POINTS` runs of ticks)."""
+        least of each run of ticks: :func:`fretc.monitors.robustness.margin_ticks`)."""
         if self.cols["rob_tick"].item(k) == _NO_TICK:
             return NO_EVIDENCE["margin"]
         a, m, i0 = self.cols["margin_at"].item(k), self.cols["length"].item(k), self._i0(k)
         margin = self.cols["margin"][a:a + m]
-        ticks: Sequence[int]
-        if m <= MARGIN_POINTS:
-            ticks = range(m)
-        else:
-            edges = np.linspace(0, m, MARGIN_POINTS + 1).astype(int)
-            ticks = [int(x + np.argmin(margin[x:y])) for x, y in zip(edges[:-1], edges[1:])]
         times = self.times
-        return [(int(i), int(times[i0 + i]), float(margin[i])) for i in ticks]
+        return [(i, int(times[i0 + i]), float(margin[i]))
+                for i in margin_ticks(margin, MARGIN_POINTS)]
 
 
 def _val(x: float) -> float | str:

@@ -143,14 +143,25 @@ def _check(comp, cols, n):
     rob = robustness(f.pt, cols, n)
     ref = BruteForce(cols, n).rho(f.pt, n - 1)
     assert rob.value == ref, comp.text
-    assert rob.margin[rob.tick] == rob.value
-    assert not (rob.margin[:rob.tick] == rob.value).any()
+    _check_tick(f.pt, rob)
     # the sign is the verdict: of the judge (interval semantics), and of pt at every tick
     j = judge(comp.requirement, f, cols, n)
     assert (rob.value >= 0) == j.holds, comp.text
     assert j.robustness is not None and j.robustness.value == rob.value
     signs = (robustness_series(f.pt, cols, n) >= 0).tolist()
     assert signs == pt_series(f.pt, cols, n).tolist(), comp.text
+
+
+def _check_tick(pt, rob):
+    """:attr:`Robustness.tick` by its definition: the first tick at the least margin for a
+    top ``H``, else the first tick of the last run of ticks at the last tick's margin."""
+    m, t = rob.margin, rob.tick
+    assert m[t] == rob.value
+    if pt.op == "H" and pt.hi is None:
+        assert rob.value == m.min() and not (m[:t] == rob.value).any()
+    else:
+        assert rob.value == m[-1] and (m[t:] == rob.value).all()
+        assert t == 0 or m[t - 1] != rob.value
 
 
 def test_every_template_key_against_brute_force(all_keys):
@@ -251,6 +262,20 @@ def test_numeric_margin_is_the_distance_to_the_threshold():
     # a vacuous requirement: the margin by which the condition never held
     assert value("whenever x > 3 the sw shall immediately satisfy x > 10",
                  [1.0, 2.5, 2.0])[0] == pytest.approx(0.5)
+
+
+def test_the_tick_of_a_last_value_is_where_its_last_run_began():
+    """A pt formula without a top ``H`` (a scope): the value is the last tick's margin and
+    the tick the first of the last run of ticks at it (the margin 0.5 at ticks 0-1 came
+    from the first mode interval; the second's eventually met at tick 3 decides)."""
+    from _monitor_helpers import entry
+    from fretc.compiler.build import compile_entry
+
+    c = compile_entry(entry("R", "in m mode the sw shall eventually satisfy x > 1"))
+    cols = {"x": np.array([1.5, 0.0, 0.5, 1.5]), "m": np.array([True, False, True, True])}
+    r = robustness(c.formalization.pt, cols, 4)
+    assert r.margin.tolist() == [0.5, 0.5, -0.5, 0.5]
+    assert (r.value, r.tick) == (0.5, 3)
 
 
 def test_memory_is_a_few_arrays_of_the_ticks_not_objects_per_tick():
