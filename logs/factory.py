@@ -16,6 +16,7 @@ from fretc.logs.base import LogSource
 from fretc.logs.csv.source import CsvSource
 
 if TYPE_CHECKING:
+    from fretc.logs.csv.read import RowSink
     from rosbags.typesys import Stores
     from rosbags.typesys.store import Typestore
 
@@ -24,8 +25,9 @@ __all__ = ["open_log"]
 
 def open_log(path: str | os.PathLike, *, fallback_typestore: Typestore | Stores | None = None,
              check_data_crc: bool = True, csv_period_ns: int = NS_PER_S,
-             msg_path: Sequence[str] = (), csv_keep: Iterable[str] | None = None
-             ) -> LogSource:
+             msg_path: Sequence[str] = (), csv_keep: Iterable[str] | None = None,
+             csv_sink: RowSink | None = None, csv_streamed: Iterable[str] = (),
+             csv_keep_times: bool = True) -> LogSource:
     """Open a recorded run for reading.
 
     Args:
@@ -42,6 +44,9 @@ def open_log(path: str | os.PathLike, *, fallback_typestore: Typestore | Stores 
         csv_period_ns: CSV only: time step between rows when there is no ``time`` column.
         csv_keep: CSV only: the columns whose values are kept (None: every one; the
             others are checked but not kept, :class:`~fretc.logs.csv.source.CsvSource`).
+        csv_sink, csv_streamed, csv_keep_times: CSV only: the columns ``csv_streamed``
+            handed to ``csv_sink`` a chunk of rows at a time as the file is read, and
+            whether the rows' times are kept (:class:`~fretc.logs.csv.source.CsvSource`).
 
     Returns:
         A :class:`LogSource` (McapSource, BagSource, CsvSource, UlogSource or
@@ -76,7 +81,8 @@ def open_log(path: str | os.PathLike, *, fallback_typestore: Typestore | Stores 
 
         return McapSource(p, check_data_crc=check_data_crc)
     if suffix == ".csv":
-        return CsvSource(p, period_ns=csv_period_ns, keep=csv_keep)
+        return CsvSource(p, period_ns=csv_period_ns, keep=csv_keep, sink=csv_sink,
+                         streamed=csv_streamed, keep_times=csv_keep_times)
     if suffix == ".ulg":
         from fretc.logs.flight.ulog import UlogSource
 

@@ -28,8 +28,8 @@ import numpy as np
 from fretc.common.problems import CsvError
 from fretc.common.units import NS_PER_S
 
-__all__ = ["RowReader", "CHUNK_ROWS", "UNKNOWN_CELL", "GAP_CELL", "CUT_CELL", "clean_cells",
-           "csv_time"]
+__all__ = ["RowReader", "RowSink", "CHUNK_ROWS", "UNKNOWN_CELL", "GAP_CELL", "CUT_CELL",
+           "clean_cells", "csv_time"]
 
 #: A cell whose value is not known at its tick (a gap of the log left the variable unknown).
 UNKNOWN_CELL = "unknown"
@@ -42,6 +42,13 @@ _BOOL_WORDS = {"true": 1, "false": 0, "1": 1, "0": 0}
 
 #: data rows read, checked and converted at once by :class:`RowReader`
 CHUNK_ROWS = 4096
+
+#: What :class:`RowReader` hands a sink after each chunk of rows of the clock read:
+#: ``(first, times, columns)``: the 0-based index of the chunk's first row, the rows' times
+#: (ns, ``int64``: the ``time`` column, or index x the period without one) and column ->
+#: its values at those rows (``bool`` for a column of 0/1 cells so far, else ``float64``;
+#: a value not known holds 0, as the kept columns). A chunk may hold no row.
+RowSink = Callable[[int, np.ndarray, dict[str, np.ndarray]], None]
 #: distinct cells whose kind :class:`RowReader` keeps (a trace repeats its cells)
 _KINDS_KEPT = 1 << 16
 #: a time in seconds of at most 9 decimals, read exactly without :class:`Decimal`
@@ -169,6 +176,14 @@ class RowReader:
     ``max_rows``: stop after the chunk (:data:`CHUNK_ROWS` rows) where the rows of the clock
     read pass it, ``over`` then True (the rows after it neither read nor checked).
 
+    ``sink``: called after each chunk of rows with the rows it read (:data:`RowSink`): the
+    columns named in ``streamed`` are handed over a chunk at a time and kept only when
+    ``keep`` names them too; ``keep_times`` False keeps no ``time`` column either
+    (``kept_times`` then None). The rows reach the sink before the file's later rows are
+    checked: a later error still raises, and a column's type is only known at the end (a
+    column of 0/1 cells reaches it as ``bool`` until its first other number, ``float64``
+    from that chunk on).
+
     Fields after :meth:`run`: ``columns`` (of the clock read), ``types`` (column -> ``bool``
     or ``float``), ``count`` (rows of the clock read), ``kept_values`` (column -> its values,
     :class:`array.array`), ``kept_times`` (the ``time`` column, ns; None without one), ``runs``
@@ -180,7 +195,9 @@ class RowReader:
     def __init__(self, path: str, header: list[str], columns: list[str], *, has_time: bool,
                  keep: frozenset[str] | None, grouped: bool,
                  own: Callable[[list[str], int], bool], clock: str | None,
-                 period_ns: int, max_rows: int | None = None) -> None:
+                 period_ns: int, max_rows: int | None = None,
+                 sink: RowSink | None = None, streamed: frozenset[str] = frozenset(),
+                 keep_times: bool = True) -> None:
         self.path, self.has_time, self.grouped, self.own_row = path, has_time, grouped, own
         #: stop once more rows than this were read (None: read them all); ``over`` says so
         self.max_rows, self.over = max_rows, False
@@ -211,6 +228,11 @@ class RowReader:
         self.runs: list[tuple[int, int]] = []
         self.next_line = -1
         self.kept = keep  # the columns whose values are kept (None: all)
+        #: the sink, the columns it is handed, and whether the times are kept
+        self.sink, self.keep_times = sink, keep_times
+        self.streamed = frozenset(streamed) & self.variables if sink is not None else frozenset()
+        self.flushed = 0  # the rows handed to the sink so far
+        self.flushed_times = 0  # (the times kept before the rows not yet handed)
 
     def run(self, raw: Iterator[tuple[int, list[str] | CsvError]]) -> None:
         """Read the rows after the header: ``(line, cells)`` as the :mod:`csv` module reads
@@ -232,6 +254,8 @@ class RowReader:
                     kept = clean_cells(cells)
                     if kept is not None:
                         self._row(line, kept)
+            if self.sink is not None:
+                self._flush()
             if self.max_rows is not None and self.count > self.max_rows:
                 self.over = True  # (the rest of the file is not read)
                 break
@@ -267,13 +291,46 @@ class RowReader:
                                "(a tick time is at most 2^63 - 1 ns)", column="time")
             self.times.append(time)
         for name, value in values.items():
-            if self.kept is not None and name not in self.kept:
+            if not self._keeps(name):
                 continue
             self._column_of(name).append(value)  # (0/1 in a column of bytes)
         if line != self.next_line:
             self.runs.append((index, line))
         self.next_line = line + 1
         self.count = index + 1
+
+    def _keeps(self, name: str) -> bool:
+        """Whether the values of column ``name`` are collected (kept, or streamed)."""
+        return self.kept is None or name in self.kept or name in self.streamed
+
+    def _flush(self) -> None:
+        """Hand the rows read since the last flush to the sink (the class docstring): the
+        streamed columns' values and the rows' times; a column or the times that are not
+        kept are dropped after."""
+        first, count = self.flushed, self.count
+        k = count - first
+        if self.has_time:
+            at = first - self.flushed_times
+            times = np.frombuffer(self.times, np.int64)[at:at + k].copy()
+            if not self.keep_times:
+                self.times = array("q")
+                self.flushed_times = count
+        else:
+            times = np.arange(first, count, dtype=np.int64) * self.period_ns
+        cols: dict[str, np.ndarray] = {}
+        for name in sorted(self.streamed):
+            col = self._column_of(name)
+            kept = self.kept is None or name in self.kept
+            at = first if kept else 0
+            if col.typecode == "d":
+                cols[name] = np.frombuffer(col, np.float64)[at:at + k].copy()
+            else:
+                cols[name] = np.frombuffer(col, np.uint8)[at:at + k].view(np.bool_).copy()
+            if not kept:
+                self.values[name] = array(col.typecode)
+        self.flushed = count
+        assert self.sink is not None  # (flushed only with a sink)
+        self.sink(first, times, cols)
 
     def _column_of(self, name: str) -> array:
         """The kept column of ``name`` (new: bytes), widened to ``float64`` once a number
@@ -369,7 +426,7 @@ class RowReader:
                 self.numeric_at[name] = lines[first_num]
             if unknown:
                 self.unknown_rows.setdefault(name, []).extend(base + k for k in unknown)
-            if self.kept is not None and name not in self.kept:
+            if not self._keeps(name):
                 continue
             col = self._column_of(name)
             want = np.float64 if col.typecode == "d" else np.uint8
@@ -443,4 +500,4 @@ class RowReader:
         self.types = {c: ("float" if c in self.numeric_at else "bool") for c in self.columns}
         self.kept_values = {c: self.values.get(c, array("B")) for c in self.columns
                             if self.kept is None or c in self.kept}
-        self.kept_times = self.times if self.has_time else None
+        self.kept_times = self.times if self.has_time and self.keep_times else None

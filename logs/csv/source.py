@@ -20,7 +20,7 @@ from fretc.common.units import NS_PER_S
 from fretc.common.problems import CsvError, LogError
 from fretc.logs.base import LogSource, Message
 # (the cells' words: UNKNOWN_CELL, GAP_CELL, CUT_CELL, are defined with their reader)
-from fretc.logs.csv.read import CUT_CELL, GAP_CELL, UNKNOWN_CELL, RowReader, clean_cells
+from fretc.logs.csv.read import CUT_CELL, GAP_CELL, UNKNOWN_CELL, RowReader, RowSink, clean_cells
 
 __all__ = ["CsvSource", "CsvRow", "CSV_TOPIC", "CSV_TYPE", "SAMPLED_MARK", "CLOCK_LINE",
            "CLOCK_COLUMN", "UNKNOWN_CELL", "GAP_CELL", "CUT_CELL", "clock_lines", "sampled_trace",
@@ -250,6 +250,12 @@ class CsvSource(LogSource):
     of its own (``fretc simulate``'s 2,000 ticks) stops reading the file a chunk of rows past
     it (:attr:`over_max_rows`), in bounded memory.
 
+    ``sink`` (:data:`fretc.logs.csv.read.RowSink`): while the file is read, the values of the
+    columns named in ``streamed`` are handed to it a chunk of rows at a time, with the rows'
+    times, and kept only when ``keep`` names them too (an audit judges requirements as the
+    rows pass: :mod:`fretc.audit.streamed`); ``keep_times`` False keeps no ``time`` column
+    (:meth:`row_times` then raises RuntimeError for a trace that has one).
+
     As a LogSource it yields one :class:`Message` per row on topic :data:`CSV_TOPIC` whose
     ``data`` has one attribute per column (so bindings may say ``/csv.speed``); the tick clock (:mod:`fretc.signals`)
     uses :meth:`rows` directly so columns are variables without bindings.
@@ -265,7 +271,8 @@ class CsvSource(LogSource):
 
     def __init__(self, path: str | os.PathLike, *, period_ns: int = NS_PER_S,
                  clock: str | None = None, keep: Iterable[str] | None = None,
-                 max_rows: int | None = None) -> None:
+                 max_rows: int | None = None, sink: RowSink | None = None,
+                 streamed: Iterable[str] = (), keep_times: bool = True) -> None:
         super().__init__(path)
         if period_ns <= 0:
             raise ValueError("period_ns must be positive")
@@ -300,6 +307,7 @@ class CsvSource(LogSource):
         #: (:attr:`row_count` rows, more than ``max_rows``), the rest neither read nor checked
         self.over_max_rows = False
         self._max_rows = max_rows
+        self._sink, self._streamed, self._keep_times = sink, frozenset(streamed), keep_times
         self._check()
 
     def _raw(self) -> Iterator[tuple[int, list[str] | CsvError]]:
@@ -363,7 +371,8 @@ class CsvSource(LogSource):
         reader = RowReader(self.path, header, self.columns, has_time=self.has_time,
                            keep=self.keep, grouped=self._grouped, own=self._own,
                            clock=self.clock, period_ns=self.period_ns,
-                           max_rows=self._max_rows)
+                           max_rows=self._max_rows, sink=self._sink,
+                           streamed=self._streamed, keep_times=self._keep_times)
         reader.run(raw)
         self.over_max_rows = reader.over
         self.columns, self.types, self.row_count = reader.columns, reader.types, reader.count
@@ -404,7 +413,13 @@ class CsvSource(LogSource):
     def row_times(self, period_ns: int | None = None) -> np.ndarray:
         """The time of each row of the clock read, ns (``int64``): its ``time`` cell, or
         without a ``time`` column the row's index × ``period_ns`` (default
-        :attr:`period_ns`)."""
+        :attr:`period_ns`).
+
+        Raises:
+            RuntimeError: the trace has a ``time`` column and its times were not kept
+                (``keep_times`` False)."""
+        if self.has_time and self._times is None:
+            raise RuntimeError(f"{self.path}: the rows' times were not kept")
         if self._times is not None:
             out = np.frombuffer(self._times, np.int64)
             out.flags.writeable = False
@@ -432,8 +447,6 @@ class CsvSource(LogSource):
 
         Raises:
             KeyError: a name of a column not kept (``keep``)."""
-        if self.unknown_rows or self.gap_rows:
-            self.partial = True
         n = self.row_count
         times = self.row_times()
 
@@ -444,9 +457,18 @@ class CsvSource(LogSource):
             return values if n else np.zeros(0, np.bool_)
 
         cols = {name: column(name) for name in names}
+        self.mark_pass()
+        return times, cols
+
+    def mark_pass(self) -> None:
+        """What a pass over the rows records besides their values (:meth:`column_pass`, and
+        a pass whose values went to a sink as the file was read): ``unknown`` cells and
+        ``gap`` rows make it ``partial``; a ``cut`` row is a gap from its time to the end
+        of the log (start the pass with ``_begin_pass``)."""
+        if self.unknown_rows or self.gap_rows:
+            self.partial = True
         if self.cut_time is not None:
             self._gap(self.cut_time, None, topics=frozenset((CSV_TOPIC,)), cause="cut")
-        return times, cols
 
     def rows(self) -> Iterator[CsvRow]:
         """The data rows of the clock read, typed (see the class docstring), in file order.
