@@ -15,9 +15,10 @@ before its first cut or gap are judged. Problems of every pass are kept.
 
 from __future__ import annotations
 
+import os
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 from fretc.signals.bindings import Bindings
 from fretc.signals.clock import missing_topics
@@ -40,6 +41,9 @@ from fretc.audit.model import AuditPlan, RequirementPlan
 from fretc.audit.operands import operand_values
 from fretc.audit.passes import LogPasses, clock_key, restrict, run_passes
 from fretc.audit.plan import select_variant
+from fretc.audit.streamed import CsvStreams, StreamedResult
+from fretc.audit.streamed_verdict import finalize_streamed, streamed_values
+from fretc.signals.csv_columns import csv_streamed_pass
 
 if TYPE_CHECKING:
     from fretc.logs.base import LogSource
@@ -142,7 +146,7 @@ def audit_keeping_passes(plan: AuditPlan, path: str) -> KeptPasses:
     if plan.bindings is not None and entity_of_requirements(plan):
         raise ValueError("audit_keeping_passes keeps the passes of plain requirements; "
                          "per-entity ones: fretc.audit.entities.log.entity_passes")
-    run = _LogRun(plan, path)
+    run = _LogRun(plan, path, stream=False)  # (the columns kept: they are written)
     la = run.run(None)
     return KeptPasses(plan, la, run.result, run.read_bindings, set(run.skip))
 
@@ -169,10 +173,12 @@ class _LogRun:
     """The audit of one log in steps; each returns False when the log's audit ends there."""
 
     def __init__(self, plan: AuditPlan, path: str,
-                 opener: Callable[[], LogSource] | None = None) -> None:
+                 opener: Callable[[], LogSource] | None = None, stream: bool = True) -> None:
         self.plan = plan
         self.path = path
         self.opener = opener  # opens the log (None: open_log)
+        #: a CSV trace's requirements may be judged as it is read (False: every column kept)
+        self.stream = stream
         self.result: LogPasses | None = None  # the passes, once read
         self.read_bindings: Bindings | None = None  # the bindings they were read with
         self.la = LogAudit(log=str(path))
@@ -187,13 +193,16 @@ class _LogRun:
         self.skip: set = set()  # requirements already decided (unknown) before the pass
         self.problems: dict[tuple, DataProblem] = {}
         self.problem_counts: dict[str, int] = {}
+        #: a CSV trace's requirements judged while it was read (:mod:`fretc.audit.streamed`)
+        self.streams: CsvStreams | None = None
+        self.stream_sampling: Any = None  # (the Sampling of their pass, once read)
 
     def run(self, progress: Callable[[float], None] | None) -> LogAudit:
         if self._open() and self._check_inputs():
             result, active, b = self._read(progress)
             self.result, self.read_bindings = result, b
             self._record_source()
-            if result is not None:
+            if result is not None or self.stream_sampling is not None:
                 self._judge(result, active, b)
         return self._finish()
 
@@ -225,9 +234,8 @@ class _LogRun:
         keep = ({v for r in plan.requirements for v in r.variables}
                 if plan.bindings is None or not plan.bindings.variables else None)
         try:
-            source = self.source = (self.opener() if self.opener is not None else open_log(
-                path, csv_period_ns=plan.csv_period_ns, msg_path=plan.config.msg_path,
-                csv_keep=keep))
+            source = self.source = (self.opener() if self.opener is not None
+                                    else self._open_log(keep))
         except FretcInputError as exc:
             return self._fail_log(str(exc), "log not audited: ")
         except OSError as exc:
@@ -260,6 +268,34 @@ class _LogRun:
         if too_many is not None:
             return self._fail_log(too_many)
         return True
+
+    def _open_log(self, keep: set[str] | None) -> LogSource:
+        """Open the log; a CSV trace read without bindings (``keep``: the columns of the
+        requirements' variables) is read with its streamable requirements judged as its
+        rows pass (:mod:`fretc.audit.streamed`): only the others' columns are kept, and
+        when some streamed requirement must be judged whole after all (its ticks unknown),
+        the file is read again keeping its columns too."""
+        plan, path = self.plan, self.path
+        csv = str(path).lower().endswith(".csv") and not os.path.isdir(path)
+        if not csv or keep is None or not self.stream:
+            return open_log(path, csv_period_ns=plan.csv_period_ns,
+                            msg_path=plan.config.msg_path, csv_keep=keep)
+        active = [r for r in plan.requirements if r.error is None]
+        streams = CsvStreams.of(plan, active)
+        if not streams.streams:
+            return open_log(path, csv_period_ns=plan.csv_period_ns, csv_keep=keep)
+        whole = {v for r in active if r.index not in streams.indexes for v in r.variables}
+        source = open_log(path, csv_period_ns=plan.csv_period_ns, csv_keep=whole,
+                          csv_sink=streams, csv_streamed=streams.names,
+                          csv_keep_times=any(r.index not in streams.indexes for r in active))
+        assert isinstance(source, CsvSource)  # (a .csv file)
+        streams.close(source)
+        self.streams = streams
+        if streams.whole:  # (read again: the columns of those judged whole kept too)
+            again = whole | {v for r in active if r.index in streams.whole
+                             for v in r.variables}
+            source = open_log(path, csv_period_ns=plan.csv_period_ns, csv_keep=again)
+        return source
 
     def _check_inputs(self) -> bool:
         """A binding for every variable, every bound topic in the log, binding types."""
@@ -343,9 +379,10 @@ class _LogRun:
         plan, source, verdicts = self.plan, self.source, self.verdicts
         assert source is not None  # (open)
         result, b, active = None, None, []
+        streamed = set(self.streams.results) if self.streams is not None else set()
         while True:
             active = [r for r in plan.requirements if verdicts[r.index].error is None
-                      and r.index not in self.skip]
+                      and r.index not in self.skip and r.index not in streamed]
             if not active:
                 break
             names = sorted({v for r in active for v in r.variables})
@@ -366,6 +403,16 @@ class _LogRun:
             collect_problems(source, result.sampling, self.problems, self.problem_counts)
             self.la.gaps = merged_gaps(result.gaps, result.bridged)
             break
+        if streamed and any(verdicts[i].error is None for i in streamed):
+            st = self.streams
+            assert st is not None and isinstance(source, CsvSource)  # (streamed: a CSV trace)
+            if result is not None:  # (the same rows: the whole pass's figures are theirs)
+                self.stream_sampling = result.sampling
+            else:
+                self.stream_sampling = csv_streamed_pass(source, st.n, st.first_time,
+                                                         st.last_time)
+                collect_problems(source, self.stream_sampling, self.problems,
+                                 self.problem_counts)
         return result, active, b
 
     def _record_source(self) -> None:
@@ -390,18 +437,24 @@ class _LogRun:
             if r.rate_topic is not None and v.error is not None and v.error == r.error:
                 v.error += rate_hint(source, r.rate_topic, la.messages)
 
-    def _judge(self, result: LogPasses, active: list[RequirementPlan],
+    def _judge(self, result: LogPasses | None, active: list[RequirementPlan],
                b: Bindings | None) -> None:
-        """Each requirement's clock figures, then its verdict; the log's figures."""
+        """Each requirement's clock figures, then its verdict; the log's figures. The
+        requirements of a CSV trace judged as it was read (:mod:`fretc.audit.streamed`)
+        are not in ``result``; the others (``active``) are."""
         la, verdicts = self.la, self.verdicts
         by_index = {}
+        passes = result.passes if result is not None else {}
         for r in active:
-            res = by_index[r.index] = result.passes[clock_key(r, b)]
+            assert result is not None  # (active requirements were read)
+            res = by_index[r.index] = passes[clock_key(r, b)]
             self._clock_figures(r, res, result, b)
-        ok = [r for r in active if verdicts[r.index].error is None
-              and r.index not in self.skip]
+        streamed = self._streamed_figures()
+        ok = [r for r in self.plan.requirements
+              if (r.index in by_index or r.index in streamed)
+              and verdicts[r.index].error is None and r.index not in self.skip]
         summarize_clocks(la, [verdicts[r.index] for r in ok])
-        silent = {t for res in result.passes.values()
+        silent = {t for res in passes.values()
                   for t in (res.sampling.missing_topics if b is not None else [])}
         # never published: no message at all, not messages that could not be decoded (the
         # requirements reading those say why, silent_reasons)
@@ -411,15 +464,47 @@ class _LogRun:
         la.missing_topics = sorted(t for t in silent
                                    if t not in unread and not records.get(t))
         if la.start_time_ns is None:
-            starts = [res.sampling.start_time for res in result.passes.values()
-                      if res.sampling.start_time is not None]
+            samplings = [res.sampling for res in passes.values()]
+            if streamed:
+                samplings.append(self.stream_sampling)
+            starts = [s.start_time for s in samplings if s.start_time is not None]
             la.start_time_ns = min(starts) if starts else None
+        violated = []
         for r in ok:
-            finalize(self.plan, r, by_index[r.index], self.bindings, verdicts[r.index], la)
+            if r.index in streamed:
+                if finalize_streamed(self.plan, r, streamed[r.index], verdicts[r.index]):
+                    violated.append(r)
+            else:
+                finalize(self.plan, r, by_index[r.index], self.bindings, verdicts[r.index],
+                         la)
+        if violated:
+            assert isinstance(self.source, CsvSource)  # (streamed: a CSV trace)
+            streamed_values(self.plan, self.source, violated, verdicts, streamed)
         la.engine = log_engine(verdicts[r.index] for r in ok)
         if self.bindings is not None:
             operand_values(self.path, self.plan, self.bindings, ok, verdicts, by_index,
                            self.source)
+
+    def _streamed_figures(self) -> dict[int, StreamedResult]:
+        """The requirements judged as the CSV trace was read, by index, with their clock
+        figures set (as :meth:`_clock_figures` sets them from a pass: the trace's rows)."""
+        st, s = self.streams, self.stream_sampling
+        if st is None or s is None:
+            return {}
+        out = {}
+        for r in self.plan.requirements:
+            got = st.results.get(r.index)
+            v = self.verdicts[r.index]
+            if got is None or v.error is not None or r.index in self.skip:
+                continue
+            out[r.index] = got
+            v.ticks_evaluated = got.n
+            v.warmup_ticks = s.warmup_ticks
+            between_ticks(v, s, r, None)
+            v.first_tick_ns = s.first_time
+            v.last_tick_ns = s.end_time
+            v.waiting_for = list(s.waiting_for)
+        return out
 
     def _clock_figures(self, r: RequirementPlan, res, result: LogPasses,
                        b: Bindings | None) -> bool:

@@ -9,9 +9,12 @@
    requirement satisfied, so the whole trace is judged) of each ``--rows`` (kept in
    ``--workdir`` and reused), and the requirements (2: R2, R4; 10: R1..R6 and four more).
 2. Runs, one at a time, ``python -m fretc audit -r REQ.fret TRACE.csv --json -`` under
-   ``/usr/bin/time -v`` (peak RSS, user + system CPU of the process, start-up included) and
-   the runner of ``fretc REQ.fret --emit c`` (``cc -O2``) over the same file, checks their
-   verdicts agree, and prints both and the ratio of peaks.
+   ``/usr/bin/time -v`` (peak RSS, user + system CPU of the process, start-up included: the
+   requirements judged as the rows are read, :mod:`fretc.audit.streamed`), the same command
+   with the whole-trace judge (``fretc.audit.streamed.ENABLED`` off: the columns of every
+   tick kept and judged at once, as every audit did before), and the runner of ``fretc
+   REQ.fret --emit c`` (``cc -O2``) over the same file, checks that the three give the same
+   verdicts and the two audits the same JSON, and prints them and the ratios.
 3. ``--trace``: the audit in this process under :mod:`tracemalloc`: the peak of Python
    allocations and the 15 largest allocation sites at the peak (numpy arrays included).
 """
@@ -105,15 +108,25 @@ def build_runner(fret: Path, out: Path) -> Path:
     return out / "runner"
 
 
-def audit_figures(fret: Path, trace: Path) -> tuple[int, float, dict[str, str]]:
+#: the command with the whole-trace judge (streaming off), as a user would run it otherwise
+_WHOLE = ("import sys, fretc.audit.streamed as s; s.ENABLED = False; "
+          "from fretc.cli import main; main(sys.argv[1:])")
+
+
+def audit_figures(fret: Path, trace: Path, whole: bool = False
+                  ) -> tuple[int, float, dict[str, str], str]:
+    """(peak RSS kB, CPU s, requirement -> verdict, the JSON) of the audit command."""
     env = dict(os.environ, PYTHONPATH=str(ROOT / "src"))
-    rss, cpu, out, code = measured([sys.executable, "-m", "fretc", "audit", "-r", str(fret),
-                                    str(trace), "--json", "-"], env)
+    head = [sys.executable, "-c", _WHOLE] if whole else [sys.executable, "-m", "fretc"]
+    rss, cpu, out, code = measured([*head, "audit", "-r", str(fret), str(trace), "--json",
+                                    "-"], env)
     if code not in (0, 1, 3):
         raise SystemExit(f"fretc audit exited {code}")
     doc = json.loads(out)
     verdicts = {v["requirement"]: v["verdict"] for la in doc["logs"] for v in la["verdicts"]}
-    return rss, cpu, verdicts
+    for la in doc["logs"]:  # (the time the audit took is no verdict)
+        la.pop("elapsed_s", None)
+    return rss, cpu, verdicts, json.dumps(doc, sort_keys=True)
 
 
 def runner_figures(runner: Path, trace: Path) -> tuple[int, float, dict[str, str]]:
@@ -170,12 +183,13 @@ def main() -> None:
     ap.add_argument("--workdir", default=os.path.join(tempfile.gettempdir(), "fretc-bench-csv"))
     ap.add_argument("--trace", action="store_true", help="tracemalloc instead of the runs")
     ap.add_argument("--no-runner", action="store_true", help="skip the C runner")
+    ap.add_argument("--no-whole", action="store_true", help="skip the whole-trace judge")
     args = ap.parse_args()
     work = Path(args.workdir)
     work.mkdir(parents=True, exist_ok=True)
-    print("| rows | requirements | fretc audit peak RSS | CPU | C runner peak RSS | CPU | "
-          "peak ratio |")
-    print("|---|---|---|---|---|---|---|")
+    print("| rows | requirements | fretc audit peak RSS | CPU | whole-trace judge peak RSS "
+          "| CPU | C runner peak RSS | CPU | peak: audit / whole | audit / C |")
+    print("|---|---|---|---|---|---|---|---|---|---|")
     for rows in args.rows:
         trace = work / f"trace_{rows}.csv"
         if not trace.exists():
@@ -186,16 +200,33 @@ def main() -> None:
             if args.trace:
                 trace_allocations(fret, trace)
                 continue
-            rss, cpu, verdicts = audit_figures(fret, trace)
-            if args.no_runner:
-                print(f"| {rows:,} | {n} | {rss / 1024:.0f} MB | {cpu:.2f} s | - | - | - |")
-                continue
-            runner = build_runner(fret, work / f"c{n}")
-            c_rss, c_cpu, c_verdicts = runner_figures(runner, trace)
-            if c_verdicts != verdicts:
-                raise SystemExit(f"verdicts differ: audit {verdicts}, runner {c_verdicts}")
-            print(f"| {rows:,} | {n} | {rss / 1024:.0f} MB | {cpu:.2f} s | "
-                  f"{c_rss / 1024:.0f} MB | {c_cpu:.2f} s | {rss / c_rss:.2f}x |", flush=True)
+            warm = work / "trace_10.csv"  # (the requirements' caches filled, as a user's
+            if not warm.exists():         # second run: every measured run alike)
+                write_trace(warm, 10)
+            audit_figures(fret, warm)
+            rss, cpu, verdicts, doc = audit_figures(fret, trace)
+            w_rss = w_cpu = c_rss = c_cpu = None
+            if not args.no_whole:
+                w_rss, w_cpu, w_verdicts, w_doc = audit_figures(fret, trace, whole=True)
+                if w_doc != doc:
+                    raise SystemExit("the streamed audit's JSON differs from the whole-trace "
+                                     "judge's")
+            if not args.no_runner:
+                runner = build_runner(fret, work / f"c{n}")
+                c_rss, c_cpu, c_verdicts = runner_figures(runner, trace)
+                if c_verdicts != verdicts:
+                    raise SystemExit(f"verdicts differ: audit {verdicts}, runner {c_verdicts}")
+
+            def mb(kb):
+                return f"{kb / 1024:.0f} MB" if kb is not None else "-"
+
+            def sec(s):
+                return f"{s:.2f} s" if s is not None else "-"
+
+            print(f"| {rows:,} | {n} | {mb(rss)} | {sec(cpu)} | {mb(w_rss)} | {sec(w_cpu)} | "
+                  f"{mb(c_rss)} | {sec(c_cpu)} | "
+                  f"{f'{rss / w_rss:.2f}x' if w_rss else '-'} | "
+                  f"{f'{rss / c_rss:.2f}x' if c_rss else '-'} |", flush=True)
 
 
 if __name__ == "__main__":

@@ -5,7 +5,9 @@ are used (the columns kept a block at a time, a topic's log times shared with th
 times while they are equal) and the robustness a chunk of 1 to 5 ticks at a time, so that the
 chunks' edges fall everywhere, inside runs of ``unknown`` cells and ``gap`` rows and just
 before a ``cut`` row. Verdicts, evidence, LTL3 verdicts, robustness, margins, problems and
-the whole audit JSON must be the same bytes."""
+the whole audit JSON must be the same bytes. The requirements are judged over the whole
+trace's columns here (``streamed.ENABLED`` off): the judge fed the rows as they are read is
+tests/audit/test_streamed.py's."""
 
 from __future__ import annotations
 
@@ -18,6 +20,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import fretc.audit.passes as passes
+import fretc.audit.streamed as streamed
 import fretc.logs.csv.read as csv_read
 import fretc.monitors.robustness as robustness
 import fretc.signals.blocks as blocks
@@ -47,6 +50,12 @@ def _plan(folder: str):
 @pytest.fixture(scope="module")
 def plan(tmp_path_factory):
     return _plan(str(tmp_path_factory.mktemp("chunks")))
+
+
+@pytest.fixture(autouse=True)
+def whole_trace_judge(monkeypatch):
+    """The columns of every tick kept and judged at once (not streamed)."""
+    monkeypatch.setattr(streamed, "ENABLED", False)
 
 
 def _trace(rnd: random.Random, n: int, timed: bool, unknown: float, gaps: float,

@@ -1,0 +1,271 @@
+"""CSV traces judged while they are read: each requirement's verdict and evidence from
+streams fed a chunk of rows at a time, in memory that does not grow with the trace.
+
+The whole-trace judge (:func:`fretc.monitors.judge.judge`) takes the columns of every tick
+at once: a trace of 10^7 rows held its columns (39 bytes a row for the Safe-ROS set) and the
+judge's arrays over every tick. A CSV trace audited without bindings is instead read once
+with a sink (:class:`fretc.logs.CsvSource`'s ``sink``): each chunk of rows goes, as it is
+read, to three streams per requirement, each the exact counterpart of one part of the
+judge, and nothing of the chunk is kept after it:
+
+* FRET's interval semantics: the verdict, the vacuity, the counts and the violations
+  (:class:`fretc.monitors.interval_stream.IntervalStream`, equal to
+  :func:`fretc.monitors.interval.evaluate_requirement` over the whole trace);
+* the pt formula's robustness: its value, tick and the margin's points
+  (:class:`fretc.monitors.robustness.RobustnessStream`, equal to
+  :func:`fretc.monitors.robustness.robustness`);
+* the LTL3 verdict (:class:`fretc.monitors.judge.Ltl3Stream`, equal to
+  :func:`fretc.monitors.judge.ltl3_verdict`).
+
+The verdict is then set by the same code as the whole-trace audit's
+(:func:`fretc.audit.finalize.judged`). The values shown around a violation are read again
+from the file, up to the last tick shown (:func:`values_around`), only for a violated
+requirement. The audit JSON is the same byte for byte as the whole-trace judge's
+(``tests/audit/test_streamed.py``, on every CSV trace the tests have and on random ones).
+
+A requirement is judged whole instead - its columns kept, as for every other log - where a
+stream cannot take it (:func:`unstreamed_reason`: a FRET temporal function, which reads
+other ticks through the scope's ``Left``/``Right``; a probability bound, whose triggers are
+trials; ``--coverage``; an automaton too large for tables) or where the trace leaves some of
+its ticks unknown, which the three-valued judge decides over the whole trace: a comparison
+reading NaN, an ``unknown`` cell in a column it reads, a ``gap`` or ``cut`` row. Those are
+known only once read, so the file is then read a second time, keeping those requirements'
+columns (:class:`fretc.audit.log` does both). Memory: a chunk of rows, the streams' state
+(a bounded window's last ticks, at most :data:`fretc.monitors.interval.MAX_LISTED` pending
+triggers listed per group, :data:`fretc.audit.verdict.MARGIN_POINTS` margin points) per
+requirement.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Mapping
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from fretc.fretish import ast as A
+from fretc.logs import CsvSource
+from fretc.monitors.expressions import EvidenceUnsupported
+from fretc.monitors.interval import Evidence
+from fretc.monitors.interval_stream import IntervalStream, stream_unsupported
+from fretc.monitors.judge import Ltl3Stream
+from fretc.monitors.nan import nan_ticks_of
+from fretc.monitors.robustness import RobustnessStream, RobustnessSummary
+from fretc.monitors.vectorized import VectorizeError, supports
+from fretc.audit.verdict import MARGIN_POINTS
+
+if TYPE_CHECKING:
+    from fretc.audit.model import AuditPlan, RequirementPlan
+
+__all__ = ["ENABLED", "StreamedResult", "CsvStreams", "unstreamed_reason", "values_around"]
+
+#: Whether CSV traces are judged while read (tests set it False to compare the two judges).
+ENABLED = True
+
+
+@dataclass
+class StreamedResult:
+    """What the streams of one requirement decided over the ``n`` rows of a trace.
+
+    Attributes:
+        evidence: the interval semantics' :class:`~fretc.monitors.interval.Evidence`.
+        times: tick -> time (ns) of every tick < ``n`` the evidence names.
+        ltl3: ``(status, tick, time)`` of the LTL3 verdict (``"unknown"``, None, None
+            without an online monitor).
+        robustness: the pt formula's :class:`~fretc.monitors.robustness.RobustnessSummary`.
+        n: the rows (ticks) judged; ``last_time`` the last one's time (ns).
+    """
+
+    evidence: Evidence
+    times: dict[int, int]
+    ltl3: tuple[str, int | None, int | None]
+    robustness: RobustnessSummary
+    n: int
+    last_time: int
+
+
+@dataclass
+class _Streams:
+    """One requirement's streams while the trace is read."""
+
+    r: RequirementPlan
+    names: tuple[str, ...]
+    exprs: list[A.Expr]
+    interval: IntervalStream
+    rob: RobustnessStream
+    ltl3: Ltl3Stream | None
+    #: why the requirement is judged whole after all (None: the streams decide it)
+    gave_up: str | None = None
+
+
+def unstreamed_reason(plan: AuditPlan, r: RequirementPlan) -> str | None:
+    """None when requirement ``r`` of ``plan`` can be judged while a CSV trace is read
+    (module docstring), else why not, in words."""
+    req, f = r.requirement, r.formalization
+    if not ENABLED:
+        return "streaming is off"
+    if r.error is not None or req is None or f is None or req.freeform:
+        return "not judged"
+    if plan.coverage:
+        return "--coverage records obligations over the whole trace"
+    if getattr(r.compiled, "probability", None) is not None:
+        return "its triggers are trials (a probability bound)"
+    why = stream_unsupported(req)
+    if why is not None:
+        return why
+    if not f.pt_causal or not supports(f.pt):
+        return "its pt formula has a future-time operator"
+    return None
+
+
+def _streams_of(r: RequirementPlan) -> _Streams | str:
+    """The streams of ``r`` (taken by :func:`unstreamed_reason`), or why one cannot be made
+    (an automaton without tables, a bounded window longer than a robustness chunk)."""
+    req, f = r.requirement, r.formalization
+    assert req is not None and f is not None  # (unstreamed_reason took it)
+    try:
+        interval = IntervalStream(req, f.ticks)
+        rob = RobustnessStream(f.pt, MARGIN_POINTS)
+        ltl3 = None if r.offline else Ltl3Stream(r.monitor_source)
+    except (EvidenceUnsupported, VectorizeError) as exc:
+        return str(exc)
+    exprs = [req.scope.mode, req.condition.expr, req.timing.stop, req.response]
+    exprs += [p.expr for p in req.condition.parts]
+    return _Streams(r, tuple(r.variables), [e for e in exprs if e is not None], interval,
+                    rob, ltl3)
+
+
+@dataclass
+class CsvStreams:
+    """The requirements of a CSV audit judged while the trace is read: the sink
+    (:data:`fretc.logs.csv.read.RowSink`) handed to :class:`fretc.logs.CsvSource`.
+
+    Build it with :meth:`of`; after the read, :meth:`close` says which requirements the
+    streams decided (:attr:`results`) and which must be judged whole (:attr:`whole`)."""
+
+    streams: list[_Streams]
+    n: int = 0
+    first_time: int | None = None
+    last_time: int | None = None
+    #: requirement index -> what its streams decided (after :meth:`close`)
+    results: dict[int, StreamedResult] = field(default_factory=dict)
+    #: requirement index -> why it is judged whole after all (after :meth:`close`)
+    whole: dict[int, str] = field(default_factory=dict)
+
+    @classmethod
+    def of(cls, plan: AuditPlan, candidates: Iterable[RequirementPlan]) -> CsvStreams:
+        """The streams of every requirement of ``candidates`` that
+        :func:`unstreamed_reason` takes and whose streams can be made."""
+        streams = []
+        for r in candidates:
+            if unstreamed_reason(plan, r) is None:
+                got = _streams_of(r)
+                if isinstance(got, _Streams):
+                    streams.append(got)
+        return cls(streams)
+
+    @property
+    def names(self) -> set[str]:
+        """The columns the streams read."""
+        return {n for s in self.streams for n in s.names}
+
+    @property
+    def indexes(self) -> set[int]:
+        """The requirements streamed (their indexes)."""
+        return {s.r.index for s in self.streams}
+
+    def __call__(self, first: int, times: np.ndarray, columns: dict[str, np.ndarray]
+                 ) -> None:
+        """Feed a chunk of rows (:data:`fretc.logs.csv.read.RowSink`) to every stream."""
+        k = len(times)
+        if k == 0:
+            return
+        if self.first_time is None:
+            self.first_time = int(times[0])
+        self.last_time = int(times[-1])
+        self.n = first + k
+        for s in self.streams:
+            if s.gave_up is None:
+                _feed(s, columns, k, times)
+
+    def close(self, source: CsvSource) -> None:
+        """After the read: the results of the streams, or why a requirement is judged
+        whole after all (module docstring)."""
+        marks = ("a gap row" if source.gap_rows else
+                 "a cut row" if source.cut_time is not None else None)
+        for s in self.streams:
+            i = s.r.index
+            unknown = [c for c in s.names if source.unknown_rows.get(c)]
+            why = s.gave_up or marks or (f"unknown cells in {', '.join(unknown)}"
+                                         if unknown else None)
+            if why is None and self.n == 0:
+                why = "no row"
+            if why is not None:
+                self.whole[i] = why
+                continue
+            assert self.last_time is not None  # (n rows)
+            ev, times = s.interval.finish()
+            status, tick, time = (s.ltl3.finish() if s.ltl3 is not None
+                                  else ("unknown", None, None))
+            self.results[i] = StreamedResult(ev, times, (status, tick, time),
+                                             s.rob.finish(), self.n, self.last_time)
+        self.streams = []
+
+
+def _feed(s: _Streams, columns: Mapping[str, np.ndarray], k: int, times: np.ndarray
+          ) -> None:
+    """Feed one chunk of ``k`` rows to the streams of ``s``; a chunk where a comparison
+    reads NaN (unknown ticks: the three-valued judge's) or a column is missing gives up."""
+    try:
+        cols = {n: columns[n] for n in s.names}
+    except KeyError as exc:
+        s.gave_up = f"no column {exc.args[0]!r}"
+        return
+    if nan_ticks_of(s.exprs, cols, k).any():
+        s.gave_up = "a comparison reads NaN"
+        s.interval = s.rob = s.ltl3 = None  # type: ignore[assignment]  # (their memory freed)
+        return
+    s.interval.feed(cols, k, times)
+    s.rob.feed(cols, k, times)
+    if s.ltl3 is not None:
+        s.ltl3.feed(cols, k, times)
+
+
+def values_around(path: str, period_ns: int, types: Mapping[str, str],
+                  wanted: Mapping[str, set[int]]) -> tuple[dict[int, int], dict[str, dict]]:
+    """The times of some rows and the values of some columns there, read again from the CSV
+    trace ``path`` up to the last row wanted (the values a violation's evidence shows
+    around its trigger and its violation, :func:`fretc.audit.finalize.values_around`).
+
+    Args:
+        path: the trace; ``period_ns`` its rows' period without a ``time`` column.
+        types: column -> ``"bool"`` or ``"float"``, as the whole file gave them (a chunk
+            read early cannot tell a column of 0/1 cells from a number column).
+        wanted: column -> the rows (0-based) whose values are wanted.
+
+    Returns:
+        ``(times, values)``: row -> time (ns) of every wanted row; column -> row -> value
+        (``bool`` or ``float``, as :func:`fretc.monitors.stepwise.to_python` gives a column's
+        item).
+    """
+    rows = sorted({i for got in wanted.values() for i in got})
+    times: dict[int, int] = {}
+    values: dict[str, dict[int, bool | float]] = {c: {} for c in wanted}
+    if not rows:
+        return times, values
+    last = rows[-1]
+
+    def sink(first: int, ts: np.ndarray, cols: dict[str, np.ndarray]) -> None:
+        lo = int(np.searchsorted(rows, first))
+        hi = int(np.searchsorted(rows, first + len(ts)))
+        for i in rows[lo:hi]:
+            times[i] = int(ts[i - first])
+            for c, got in wanted.items():
+                if i in got:
+                    x = cols[c][i - first]
+                    values[c][i] = bool(x) if types.get(c) == "bool" else float(x)
+
+    CsvSource(path, period_ns=period_ns, keep=(), sink=sink, streamed=set(wanted),
+              keep_times=False, max_rows=last + 1)
+    return times, values
