@@ -286,3 +286,18 @@ def test_long_ticks_and_listed_violations(plan, tmp_path):
     violations = [v["violations"] for v in json.loads(got)["logs"][0]["verdicts"]
                   if v.get("violations")]
     assert max(violations) > 100
+
+
+@pytest.mark.parametrize("marks", ["", "nan", "unknown"])
+def test_a_requirement_alone_is_judged_as_in_the_set(plan, tmp_path, marks):
+    """Each requirement audited alone gets the verdict it gets among the others, whichever
+    judge takes it (the streams, or the columns after a NaN or an ``unknown`` cell sent the
+    others back): one requirement's result never depends on another's presence."""
+    from dataclasses import replace
+
+    path = tmp_path / "trace.csv"
+    path.write_text(_trace(random.Random(11), 200, True, marks), encoding="utf-8")
+    together = audit_log(plan, str(path)).to_json()["verdicts"]
+    for r, whole in zip(plan.requirements, together):
+        alone = audit_log(replace(plan, requirements=[r]), str(path)).to_json()["verdicts"]
+        assert alone == [whole], r.id
