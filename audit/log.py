@@ -498,12 +498,7 @@ class _LogRun:
             if got is None or v.error is not None or r.index in self.skip:
                 continue
             out[r.index] = got
-            v.ticks_evaluated = got.n
-            v.warmup_ticks = s.warmup_ticks
-            between_ticks(v, s, r, None)
-            v.first_tick_ns = s.first_time
-            v.last_tick_ns = s.end_time
-            v.waiting_for = list(s.waiting_for)
+            _tick_figures(v, s, r, got.n, None)
         return out
 
     def _clock_figures(self, r: RequirementPlan, res, result: LogPasses,
@@ -512,15 +507,10 @@ class _LogRun:
         its clock failed or a topic it reads gave nothing."""
         la, v, key = self.la, self.verdicts[r.index], clock_key(r, b)
         s = res.sampling
-        v.ticks_evaluated = len(res.times)
-        v.warmup_ticks = s.warmup_ticks
-        between_ticks(v, s, r, b)
-        v.first_tick_ns = s.first_time
-        v.last_tick_ns = s.end_time
+        _tick_figures(v, s, r, len(res.times), b)
         if res.cut:  # ticks after the damage are not judged
             v.last_tick_ns = int(res.times[-1]) if len(res.times) else None
             la.ticks_after_damage = max(la.ticks_after_damage, res.cut)
-        v.waiting_for = list(s.waiting_for)
         err = result.errors.get(key)
         bad = [n for n in r.variables if n in result.failed.get(key, {})]
         if err is not None:
@@ -558,6 +548,18 @@ class _LogRun:
         if not la.gaps:
             return "the log is damaged: its messages may be in what could not be read"
         return None
+
+
+def _tick_figures(v: Verdict, s: Any, r: RequirementPlan, n: int, b: Bindings | None) -> None:
+    """The verdict's tick figures from its clock's :class:`~fretc.signals.Sampling` ``s`` of
+    ``n`` evaluated ticks: counts, warm-up, what passed between ticks, first and last tick
+    times, the topics it waited for."""
+    v.ticks_evaluated = n
+    v.warmup_ticks = s.warmup_ticks
+    between_ticks(v, s, r, b)
+    v.first_tick_ns = s.first_time
+    v.last_tick_ns = s.end_time
+    v.waiting_for = list(s.waiting_for)
 
 
 def log_engine(verdicts: Iterable[Verdict]) -> str | None:

@@ -66,6 +66,7 @@ if TYPE_CHECKING:
     from fretc.monitors.unknowns import Unknowns
 
 __all__ = ["EvidenceUnsupported", "Violation", "Evidence", "evaluate_requirement", "verdict_of",
+           "duration_of",
            "endpoints", "scope_mode",
            "scope_intervals", "scope_of", "trace_signals", "trigger_points", "OBLIGATIONS"]
 
@@ -323,16 +324,7 @@ def evaluate_requirement(req: A.Requirement, columns: Mapping[str, np.ndarray], 
     R, C, S = _signals(req, columns, n, mode)
     if favour is not None:
         R, C, S = _favoured(req, R, C, S, favour)
-    k = None
-    if timing in A.DURATION_TIMINGS:
-        if duration_ticks is not None:
-            k = int(duration_ticks)
-        else:
-            assert req.timing.duration is not None  # (a duration timing has it)
-            amount = Fraction(req.timing.duration.amount)
-            if amount.denominator != 1:
-                raise EvidenceUnsupported("a fractional duration without a tick period")
-            k = int(amount)
+    k = duration_of(req, duration_ticks)
     checker = ObligationChecker(timing, scope.startswith("only"), R, S, k)
     triggers = violations = 0
     first: Violation | None = None
@@ -357,6 +349,25 @@ def evaluate_requirement(req: A.Requirement, columns: Mapping[str, np.ndarray], 
                     violation=first, ticks=n,
                     first_interval=intervals[0] if intervals else None,
                     first_trigger=first_trigger, listed=listed)
+
+
+def duration_of(req: A.Requirement, duration_ticks: int | None) -> int | None:
+    """The timing's duration in ticks (``within``/``for``/``after``; None for the timings
+    without one): ``duration_ticks`` as the compiler converted it
+    (``Formalization.ticks``), or without it the duration's amount read as ticks.
+
+    Raises:
+        EvidenceUnsupported: a fractional amount without ``duration_ticks`` (a duration in
+            time units with no tick period)."""
+    if req.timing.kind not in A.DURATION_TIMINGS:
+        return None
+    if duration_ticks is not None:
+        return int(duration_ticks)
+    assert req.timing.duration is not None  # (a duration timing has it)
+    amount = Fraction(req.timing.duration.amount)
+    if amount.denominator != 1:
+        raise EvidenceUnsupported("a fractional duration without a tick period")
+    return int(amount)
 
 
 def _favoured(req: A.Requirement, R, C, S, favour):

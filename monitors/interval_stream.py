@@ -53,13 +53,12 @@ from __future__ import annotations
 
 from collections.abc import Iterator, Mapping
 from dataclasses import dataclass
-from fractions import Fraction
 
 import numpy as np
 
 from fretc.fretish import ast as A
 from fretc.monitors.expressions import ColumnExpressions, EvidenceUnsupported
-from fretc.monitors.interval import MAX_LISTED, Evidence, Violation
+from fretc.monitors.interval import MAX_LISTED, Evidence, Violation, duration_of
 
 __all__ = ["IntervalStream", "stream_unsupported", "NOT_POINTWISE"]
 
@@ -162,18 +161,12 @@ def stream_unsupported(req: A.Requirement) -> str | None:
 
 
 def _duration(req: A.Requirement, duration_ticks: int | None) -> int:
-    """The timing's duration in ticks as :func:`evaluate_requirement` takes it (0 for the
-    timings without one)."""
-    if req.timing.kind not in A.DURATION_TIMINGS:
-        return 0
-    if duration_ticks is not None:
-        k = int(duration_ticks)
-    else:
-        assert req.timing.duration is not None  # (a duration timing has it)
-        amount = Fraction(req.timing.duration.amount)
-        if amount.denominator != 1:
-            raise EvidenceUnsupported("a fractional duration without a tick period")
-        k = int(amount)
+    """The timing's duration in ticks as :func:`evaluate_requirement` takes it
+    (:func:`~fretc.monitors.interval.duration_of`; 0 for the timings without one).
+
+    Raises:
+        EvidenceUnsupported: as ``duration_of``, and a negative duration."""
+    k = duration_of(req, duration_ticks) or 0
     if k < 0:
         raise EvidenceUnsupported(f"a negative duration ({k} ticks)")
     return k
