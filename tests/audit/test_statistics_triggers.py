@@ -196,7 +196,8 @@ def test_one_log_decides_no_per_trigger_bound(tmp_path):
 def test_statistics_options_are_validated(fleet, option, value):
     res = CliRunner().invoke(main, ["audit", "-r", str(fleet / "p.fret"), str(fleet / "runs"),
                                     "--no-progress", option, value])
-    assert res.exit_code == 2 and "Invalid value for '--confidence'" in res.output
+    # fretc's refusal, not click's wording of it (which changes between click releases)
+    assert res.exit_code == 2 and "'--confidence'" in res.output, res.output
     assert "Traceback" not in res.output
 
 

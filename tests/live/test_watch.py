@@ -378,7 +378,8 @@ def test_watch_time_options_refuse_nan_and_infinities(args):
     from fretc.cli import main
 
     res = CliRunner().invoke(main, ["watch", "ws://127.0.0.1:9", "-r", REQS, *args])
-    assert res.exit_code == 2 and f"Invalid value for '{args[0]}'" in res.output, res.output
+    # fretc's refusal naming the option, not click's wording around it
+    assert res.exit_code == 2 and f"'{args[0]}'" in res.output, res.output
 
 
 def test_a_topic_advertised_with_another_type_than_the_bindings_declare_is_not_read(tmp_path):
