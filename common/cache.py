@@ -26,11 +26,22 @@ output (a requirement's parsed AST). So:
   what OpenSSH's ``StrictModes`` asks of ``~/.ssh``. Otherwise the cache is skipped with
   one warning on the standard error (never a failure).
 * **Sealed entries.** Every entry carries an HMAC-SHA256 (RFC 2104) of its kind, name and
-  bytes under a secret key of 32 random bytes that fretc keeps in the folder
-  (``seal-key``, mode 0600, refused unless a private regular file of the user's); an entry
-  whose seal does not verify (planted, altered, copied from another cache) is a miss, never
-  decoded. Data entries are JSON or ``marshal`` data of plain values (no pickle): decoding
-  them runs no code.
+  bytes under a key of the cache folder (:func:`_seal_key`): HMAC-SHA256 of the folder's
+  identity (its resolved path, device and inode) under a secret key of 32 random bytes that
+  fretc keeps *outside* every cache folder, in the user's state folder (:func:`key_dir`:
+  ``$FRETC_STATE_DIR``, else ``$XDG_STATE_HOME/fretc``, else ``~/.local/state/fretc``; file
+  ``seal-key``). The key's folder is used only when it is owned by the user with mode 0700
+  (no access for group or others; the folders above it as the cache's), is not inside the
+  cache folder, and the key is a regular file of the user's, mode 0600 or less, of 32 bytes;
+  otherwise the cache is not used (one warning). So a cache folder copied or restored with
+  its modes (a CI cache, a tar file, an image layer) brings no key: it is another folder, its
+  entries' seals do not verify, and every entry is a miss, recomputed; nobody who can only
+  copy a cache folder can seal an entry of their own (an entry that runs code, or one that
+  turns a violated requirement into a satisfied one). An entry whose seal does not verify
+  (planted, altered, copied from another cache or another folder) is a miss, never decoded.
+  Data entries are JSON or ``marshal`` data of plain values (no pickle): decoding them runs
+  no code. (Until issue 91, the key was a file ``seal-key`` in the cache folder itself, and
+  travelled with it; such a file is now ignored.)
 * **Bounded reads.** An entry is read only when it is a regular file (opened without
   following a symbolic link, non-blocking, checked with ``fstat`` after the open: a FIFO or a
   link to ``/dev/zero`` is a miss) owned by the user and at most :data:`MAX_ENTRY_BYTES`.
@@ -47,17 +58,18 @@ from typing import TYPE_CHECKING
 if TYPE_CHECKING:  # pathlib is imported lazily (start-up time)
     from pathlib import Path
 
-__all__ = ["cache_dir", "key_of", "files_key", "read_sealed", "write_sealed", "remove",
-           "digest", "hmac_sha256", "MAX_ENTRY_BYTES", "KEY_FILE"]
+__all__ = ["cache_dir", "key_dir", "key_of", "files_key", "read_sealed", "write_sealed",
+           "remove", "digest", "hmac_sha256", "MAX_ENTRY_BYTES", "KEY_FILE"]
 
 #: the largest entry read or written (bytes); a larger file in the folder is a miss
 MAX_ENTRY_BYTES = 64 * 1024 * 1024
-#: the name of the seal key's file in the cache folder
+#: the name of the seal key's file in the key's folder (:func:`key_dir`; never a cache folder:
+#: an entry may not have this name either, the name a key had in the cache folder until issue 91)
 KEY_FILE = "seal-key"
 _KEY_BYTES = 32
 #: root -> the folder to use (the same string), or "" when refused (checked once a process)
 _CHECKED: dict[str, str] = {}
-#: root -> its seal key, or b"" when there is none that can be used
+#: root -> its seal key (the cache folder's: :func:`_seal_key`)
 _KEYS: dict[str, bytes] = {}
 _WARNED: set[str] = set()
 
@@ -109,6 +121,41 @@ def cache_dir() -> Path | None:
     return Path(root)
 
 
+def _key_root() -> str | None:
+    """The folder of the seal key as configured (not checked, not created), or None when
+    there is none (then the disk cache is not used). ``$FRETC_STATE_DIR`` if set (empty:
+    none; relative: ignored with a warning, as ``FRETC_CACHE_DIR``), else
+    ``$XDG_STATE_HOME/fretc`` (absolute only: XDG Base Directory Specification 0.8), else
+    ``~/.local/state/fretc``. No pathlib: this runs at every start-up that reads the cache."""
+    env = os.environ.get("FRETC_STATE_DIR")
+    if env is not None:
+        if not env.strip():
+            return None
+        if os.path.isabs(env):
+            return env
+        _warn(f"FRETC_STATE_DIR={env!r} is not an absolute path: ignored "
+              "(the default state folder is used)")
+    xdg = os.environ.get("XDG_STATE_HOME")
+    if xdg and os.path.isabs(xdg):
+        return os.path.join(xdg, "fretc")
+    home = os.path.expanduser("~")
+    if not os.path.isabs(home):
+        return None
+    return os.path.join(home, ".local", "state", "fretc")
+
+
+def key_dir() -> Path | None:
+    """The folder that holds the cache's seal key (module docstring: ``$FRETC_STATE_DIR``,
+    else ``$XDG_STATE_HOME/fretc``, else ``~/.local/state/fretc``; a :class:`pathlib.Path`,
+    neither checked nor created here), or None when there is none (``FRETC_STATE_DIR=""``,
+    no home): then the disk cache is not used."""
+    root = _key_root()
+    if root is None:
+        return None
+    from pathlib import Path
+    return Path(root)
+
+
 def _unsafe(st: os.stat_result, euid: int, own_only: bool) -> str | None:
     """Why a folder with status ``st`` cannot hold the cache (None: it can). ``own_only``:
     the cache folder itself (owned by the user, writable by no one else); otherwise a folder
@@ -122,23 +169,28 @@ def _unsafe(st: os.stat_result, euid: int, own_only: bool) -> str | None:
     return None
 
 
-def _problem(root: str) -> str | None:
-    """Why the existing folder ``root`` cannot hold the cache, or None. Raises OSError when
-    it cannot be examined."""
+def _problem(root: str, what: str = "the cache folder", closed: bool = False) -> str | None:
+    """Why the existing folder ``root`` cannot hold the cache (or, ``what`` naming it, the
+    seal key), or None. ``closed``: the folder must also be unreadable by group and others
+    (mode 0700 or less: the seal key's folder). Raises OSError when it cannot be
+    examined."""
     euid = _euid()
     if euid is None:
         return None
     real = os.path.realpath(root)
-    why = _unsafe(os.stat(real), euid, True)
+    st = os.stat(real)
+    why = _unsafe(st, euid, True)
+    if why is None and closed and st.st_mode & 0o077:
+        why = f"is open to others (mode {stat.S_IMODE(st.st_mode):04o}, not 0700)"
     if why is not None:
-        return f"the cache folder {root} {why}"
+        return f"{what} {root} {why}"
     # the folders above it as named (where a link to it would be replaced) and as resolved
     for start in {os.path.dirname(os.path.abspath(root)), os.path.dirname(real)}:
         parent = start
         while True:
             why = _unsafe(os.stat(parent), euid, False)
             if why is not None:
-                return f"the folder {parent} above the cache folder {root} {why}"
+                return f"the folder {parent} above {what} {root} {why}"
             up = os.path.dirname(parent)
             if up == parent:
                 break
@@ -313,22 +365,71 @@ def _write_atomic(folder: str, name: str, data: bytes) -> bool:
 
 
 def _seal_key(root: str, create: bool) -> bytes | None:
-    """The seal key of the cache folder ``root`` (made when missing and ``create``), or
-    None: none, or one that is not a private regular file of 32 bytes (one warning)."""
+    """The seal key of the cache folder ``root``: HMAC-SHA256 of the folder's identity (its
+    resolved path, device and inode numbers) under the user's secret key
+    (:func:`_user_key`, made when missing and ``create``), so that a copy of the folder, or
+    the folder restored from an archive, has another key (module docstring); None when
+    there is no usable secret key (the cache is then not used; one warning when one is
+    refused)."""
     got = _KEYS.get(root)
     if got:
         return got
-    path = os.path.join(root, KEY_FILE)
+    secret = _user_key(root, create)
+    if secret is None:
+        return None
+    try:
+        real = os.path.realpath(root)
+        st = os.stat(real)
+    except OSError:
+        return None
+    identity = f"{real}\x00{st.st_dev}\x00{st.st_ino}".encode("utf-8", "surrogatepass")
+    key = hmac_sha256(secret, b"fretc cache folder key 1\x00", identity)
+    _KEYS[root] = key
+    return key
+
+
+def _inside(path: str, folder: str) -> bool:
+    """Whether ``path`` is ``folder`` or inside it, both resolved."""
+    p, f = os.path.realpath(path), os.path.realpath(folder)
+    return p == f or p.startswith(f.rstrip(os.sep) + os.sep)
+
+
+def _user_key(root: str, create: bool) -> bytes | None:
+    """The user's secret key (32 bytes) in :func:`key_dir`'s folder, made (with the folder,
+    mode 0700) when missing and ``create``; None when there is none, or the folder or the
+    file is refused (module docstring: one warning, and the cache folder ``root`` is not
+    used)."""
+    folder = _key_root()
+    if folder is None:
+        return None
+    path = os.path.join(folder, KEY_FILE)
+    try:
+        if _inside(folder, root):
+            why: str | None = (f"the seal key's folder {folder} is inside the cache folder "
+                               f"{root} (a copy of the cache would bring its key)")
+        elif not os.path.lexists(folder):
+            if not create:
+                return None
+            _make_private(folder)
+            why = _problem(folder, "the seal key's folder", closed=True)
+        else:
+            why = _problem(folder, "the seal key's folder", closed=True)
+    except OSError:
+        return None
+    if why is not None:
+        _warn(f"{why}: the cache is not used (the key's folder must be private to you: "
+              "chmod 700 it, or set FRETC_STATE_DIR to another folder)")
+        _CHECKED[root] = ""
+        return None
     key = _read_regular(path, _KEY_BYTES)
     if key is None and create and not os.path.lexists(path):
-        key = _make_key(root, path)
+        key = _make_key(folder, path)
     if key is not None and len(key) == _KEY_BYTES and _private(path):
-        _KEYS[root] = key
         return key
     if key is not None or os.path.lexists(path):
         _warn(f"the cache's seal key {path} is not a private regular file of "
-              f"{_KEY_BYTES} bytes: the cache is not used (remove the file: fretc makes "
-              "another)")
+              f"{_KEY_BYTES} bytes (mode 0600): the cache is not used (remove the file: "
+              "fretc makes another)")
         _CHECKED[root] = ""
     return None
 
@@ -342,9 +443,10 @@ def _private(path: str) -> bool:
 
 
 def _make_key(root: str, path: str) -> bytes | None:
-    """A new seal key written to ``path``: 32 bytes of ``os.urandom`` in a temporary file
-    (mode 0600) linked to its name (``link`` never replaces: when another process made one
-    first, that one is read). None when the folder cannot be written."""
+    """A new seal key written to ``path`` (in the folder ``root``): 32 bytes of
+    ``os.urandom`` in a temporary file (mode 0600) linked to its name (``link`` never
+    replaces: when another process made one first, that one is read). None when the folder
+    cannot be written."""
     import tempfile
 
     key = os.urandom(_KEY_BYTES)
@@ -391,8 +493,8 @@ def read_sealed(kind: str, name: str, magic: bytes, made_from: bytes) -> bytes |
     of what the payload was made from), or None: cache off or refused, no entry, not a
     regular file of the user's or over :data:`MAX_ENTRY_BYTES`, another layout, made from
     something else, or a seal (HMAC-SHA256 under the cache's key) that does not verify
-    (altered, planted, or written under another key). Raises ValueError for a ``kind`` or
-    ``name`` that is not a plain file name."""
+    (altered, planted, written under another key, or in another folder: a copy). Raises
+    ValueError for a ``kind`` or ``name`` that is not a plain file name."""
     _check_name(kind, name)
     root = _usable(create=False)
     if root is None:

@@ -6,7 +6,10 @@
   write entries into the user's own cache (``~/.cache/fretc``). The folder is kept between
   runs, so a second run is warm as a user's would be; the tests of cold runs, damaged
   entries and read-only folders set ``FRETC_CACHE_DIR`` to their own ``tmp_path``. Set before
-  any test runs, so the fretc subprocesses the tests start inherit it.
+  any test runs, so the fretc subprocesses the tests start inherit it. The cache's seal key
+  (kept outside the cache folder, in the user's state folder: ``~/.local/state/fretc``)
+  goes likewise to a folder of the temporary directory, one per user, unless
+  ``FRETC_STATE_DIR`` is already set: the suite must not write a key into the user's home.
 * ``long``: the tests of 3 s or more listed in ``long_tests.txt``, left out of the default
   run (which must stay under 10 minutes on a 2-core machine) and run by CI in a step of
   their own (``-m long``).
@@ -50,6 +53,10 @@ sys.dont_write_bytecode = False
 TEST_CACHE_DIR = os.path.join(tempfile.gettempdir(),
                               f"fretc-test-cache-{getattr(os, 'getuid', lambda: 0)()}")
 os.environ.setdefault("FRETC_CACHE_DIR", TEST_CACHE_DIR)
+#: where the suite's seal key of the cache goes (common/cache.py: never in the cache folder)
+TEST_STATE_DIR = os.path.join(tempfile.gettempdir(),
+                              f"fretc-test-state-{getattr(os, 'getuid', lambda: 0)()}")
+os.environ.setdefault("FRETC_STATE_DIR", TEST_STATE_DIR)
 
 #: cases of each parametrized slow test that the default run takes
 SLOW_SAMPLE = 2

@@ -2,7 +2,8 @@
 0700 whatever the umask; a folder owned by another user, or writable by others (itself, or
 a folder above it without the sticky bit), skipped with one warning, never a failure; a
 relative ``XDG_CACHE_HOME`` ignored (XDG Base Directory Specification); an HMAC seal under
-the folder's own key (RFC 2104, checked against :mod:`hmac`)."""
+the folder's own key (RFC 2104, checked against :mod:`hmac`), derived from a key kept outside
+the cache folder (tests/common/test_cache_copied.py: a copied or restored folder)."""
 
 from __future__ import annotations
 
@@ -152,16 +153,21 @@ def test_the_command_skips_a_cache_others_can_write_with_one_warning(tmp_path):
     assert list(root.iterdir()) == []
 
 
-def test_seal_key_is_private_and_kept(tmp_path, monkeypatch, capsys):
-    root = tmp_path / "c"
+def test_seal_key_is_private_and_kept_outside_the_cache(tmp_path, monkeypatch, capsys):
+    """The key is made in the state folder (``FRETC_STATE_DIR``), never in the cache folder:
+    mode 0600 in a folder of mode 0700, 32 bytes, one a user; a key readable by others is
+    refused (the cache is then not used, one warning)."""
+    root, state = tmp_path / "c", tmp_path / "state" / "fretc"
     monkeypatch.setenv("FRETC_CACHE_DIR", str(root))
+    monkeypatch.setenv("FRETC_STATE_DIR", str(state))
     assert cache.write_sealed("kind", "name", MAGIC, MADE, b"payload")
-    key = root / cache.KEY_FILE
-    assert _mode(key) == 0o600 and len(key.read_bytes()) == 32
+    assert not (root / cache.KEY_FILE).exists()
+    key = state / cache.KEY_FILE
+    assert _mode(key) == 0o600 and len(key.read_bytes()) == 32 and _mode(state) == 0o700
     first = key.read_bytes()
     monkeypatch.setattr(cache, "_KEYS", {})
     assert cache.write_sealed("kind", "name2", MAGIC, MADE, b"payload")
-    assert key.read_bytes() == first  # (one key a folder)
+    assert key.read_bytes() == first  # (one key a user)
     key.chmod(0o644)  # readable by others: refused
     monkeypatch.setattr(cache, "_KEYS", {})
     assert cache.read_sealed("kind", "name", MAGIC, MADE) is None
