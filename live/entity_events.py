@@ -30,7 +30,8 @@ from fretc.common.problems import BindingError, SignalError
 from fretc.common.streams import log_topics
 from fretc.signals.bindings.binding import compile_expression
 from fretc.signals.bindings.compile import EvalState
-from fretc.signals.bindings.extract import Valid
+from fretc.signals.bindings.expression import Field
+from fretc.signals.bindings.extract import Valid, make_extractor
 from fretc.audit.passes import restrict as restrict_bindings
 from fretc.signals.clock import Clock, Sampling, Tick, present_tf
 from fretc.signals.streams import Streams
@@ -63,6 +64,11 @@ class _Kind:
         key, self.matching, _hold = bindings.entities[name]
         self.key = compile_expression(f"entity_{name}", key, source=str(bindings.source))
         self.key_topic = next(iter(self.key.topics)) if len(self.key.topics) == 1 else None
+        # (a field path: its keys read exactly, integers of any width as ints, as the audit
+        # reads them: fretc.audit.entities.kinds.EntityKind.exact)
+        ast = self.key.ast
+        self.exact = (make_extractor(ast, self.key.constants, exact=True)
+                      if isinstance(ast, Field) and not ast.filters else None)
         self.seen: set = set()
         self.instances: list[_Instance] = []
 
@@ -72,7 +78,7 @@ class _Kind:
         assert topic is not None  # (values of a key of one topic)
         st.msgs[topic], st.times[topic], st.now = data, log_time, log_time
         try:
-            v = self.key._scalar(st)  # type: ignore[misc]
+            v = self.exact(data) if self.exact is not None else self.key._scalar(st)  # type: ignore[misc]
         except Exception:  # noqa: BLE001 - the audit at the end names the error
             return []
         if isinstance(v, Valid):

@@ -8,6 +8,7 @@ docs/bindings.md, "One verdict per entity"."""
 from __future__ import annotations
 
 from array import array
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -17,8 +18,8 @@ from fretc.common.problems import BindingError, SignalError
 from fretc.common.streams import base_topic, is_stream, log_topics
 from fretc.signals.bindings import Bindings
 from fretc.signals.bindings.binding import Binding, compile_kept
-from fretc.signals.bindings.expression import EntityParam
-from fretc.signals.bindings.extract import Valid
+from fretc.signals.bindings.expression import EntityParam, Field
+from fretc.signals.bindings.extract import Valid, make_extractor
 
 __all__ = ["EntityKind", "EntityTable", "entity_kind", "key_items", "own_bindings",
            "check_stream", "clock_topics"]
@@ -31,7 +32,10 @@ class EntityKind:
     of its own messages), else an array of keys per message (the entities present);
     ``hold``: what a tick reads of an entity of an array key
     (:data:`~fretc.signals.bindings.spec.HOLDS`: ``"entity"``, its own newest message that
-    carried it, held to the end of the log)."""
+    carried it, held to the end of the log). ``exact``: message -> its keys read exactly
+    (:func:`fretc.signals.bindings.extract.entity_key`: an integer key of any width an int,
+    never a float64 that merges ``uint64`` ids past 2**53) when the key is a field path, as
+    it is; None: read by ``binding``."""
 
     name: str
     key: str
@@ -40,6 +44,7 @@ class EntityKind:
     topic: str
     stream: bool
     hold: str = "message"
+    exact: Callable[[Any], Any] | None = None
 
     @property
     def held(self) -> bool:
@@ -58,7 +63,10 @@ def entity_kind(bindings: Bindings, name: str) -> EntityKind:
         raise BindingError(str(bindings.source), f"[entities] {name}: the key {key!r} is a "
                            "field path of one topic, e.g. \"/tracks.tracks[:].id\"")
     topic = next(iter(b.topics))
-    return EntityKind(name, key, matching, b, topic, not any(f.multi for f in b.fields), hold)
+    exact = (make_extractor(b.ast, b.constants, exact=True) if isinstance(b.ast, Field)
+             and not b.ast.filters else None)
+    return EntityKind(name, key, matching, b, topic, not any(f.multi for f in b.fields), hold,
+                      exact)
 
 
 def key_items(v: Any) -> list:

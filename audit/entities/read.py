@@ -284,14 +284,18 @@ class EntityClock(Clock):
         self.msg_rows = {k: v for k, v in self.msg_rows.items() if k in keep}
 
     def _keys(self, topic: str, t: int, data: Any) -> list:
-        """The keys a message of the key's topic carries, by the key's binding.
+        """The keys a message of the key's topic carries, by the key's binding, read exactly
+        where the key is a field path (:attr:`EntityKind.exact`: integers of any width as
+        ints, so ``uint64`` ids 2**53 and 2**53 + 1 are two entities).
 
         Raises:
             SignalError: they cannot be read (named with the message's log time)."""
         kind, st = self.kind, self.key_state
-        st.msgs[kind.topic], st.times[kind.topic], st.now = data, t, t
-        st.values.clear()
         try:
+            if kind.exact is not None:  # (a field path: its keys exact, no float64 between)
+                return key_items(kind.exact(data))
+            st.msgs[kind.topic], st.times[kind.topic], st.now = data, t, t
+            st.values.clear()
             values = key_items(kind.binding._scalar(st))  # type: ignore[misc]
         except Exception as exc:  # noqa: BLE001 - an extractor's error, named with the message
             raise SignalError(f"[entities] {kind.name}: {kind.key} cannot be read from the "

@@ -33,7 +33,7 @@ from fretc.signals.between_ticks import is_boolean
 from fretc.signals.bindings.binding import Binding
 from fretc.signals.bindings.expression import (BinOp, Const, EntityParam, Field, Filter, FuncCall,
                                                Named, Slice, UnaryOp, walk)
-from fretc.signals.bindings.extract import Valid, by_entity, normalize_scalar
+from fretc.signals.bindings.extract import Valid, by_entity, entity_key, normalize_scalar
 from fretc.signals.columns import Irregular
 
 __all__ = ["ItemField", "row_fields", "row_values", "item_values", "reads_items_of", "RowColumns",
@@ -104,7 +104,9 @@ def row_fields(own: list[Binding], topic: str) -> dict[Field, ItemField] | None:
     return out
 
 
-#: Integers a float64 holds exactly (keys read as numbers are integers again after it)
+#: Integers a float64 holds exactly. Keys are no longer read through a float64
+#: (:func:`fretc.signals.bindings.extract.entity_key`: integers of every width exact); kept
+#: for what still compares with it.
 _EXACT = 2 ** 53
 
 
@@ -146,12 +148,12 @@ class KeyReader:
             vals = [self.key(x) for x in items]
         except Exception:  # noqa: BLE001 - the binding reads it again and names the error
             return None
-        if all(type(v) is int and -_EXACT < v < _EXACT for v in vals):
-            return vals  # (the binding's floats, each an integer: the same keys)
-        vals = [normalize_scalar(v) for v in vals]
+        if all(type(v) is int for v in vals):
+            return vals  # (the binding's exact keys: ints of any width, no float64 between)
+        vals = [entity_key(v) for v in vals]
         if all(type(v) is str for v in vals):
             return vals
-        if all(type(v) is float and v - v == 0.0 for v in vals):  # (finite)
+        if all(type(v) in (int, float) and v - v == 0 for v in vals):  # (finite numbers)
             return vals
         return None
 
@@ -167,8 +169,7 @@ class KeyReader:
             keys = list(map(self.key, chain.from_iterable(arrays)))
         except Exception:  # noqa: BLE001 - one at a time: the binding names the error
             return None
-        if keys and (set(map(type, keys)) != {int} or min(keys) <= -_EXACT
-                     or max(keys) >= _EXACT):
+        if keys and set(map(type, keys)) != {int}:  # (ints of any width: exact keys)
             return None
         return keys, arrays
 

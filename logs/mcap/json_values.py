@@ -222,9 +222,9 @@ def as_message(value: Any) -> Any:
         return _list_message(value, set(map(type, value)))  # (exact built-in types)
     if isinstance(value, (bytes, bytearray)):
         return np.frombuffer(bytes(value), dtype=np.uint8)
-    if type(value) is int and not _INT64[0] <= value <= _INT64[1]:
+    if type(value) is int and not _INT64[0] <= value <= _UINT64_MAX:
         return _big(value)
-    return value
+    return value  # (an integer of int64's or uint64's range exact: an id past 2**53 too)
 
 
 def _list_message(value: list, kinds: set) -> Any:
@@ -236,7 +236,10 @@ def _list_message(value: list, kinds: set) -> Any:
         try:
             return np.array(value, dtype=np.int64)
         except OverflowError:
-            return np.array([_big(x) for x in value], dtype=np.float64)
+            pass
+        if min(value) >= 0 and max(value) <= _UINT64_MAX:  # (uint64 ids: exact, as CDR's)
+            return np.array(value, dtype=np.uint64)
+        return np.array([_big(x) for x in value], dtype=np.float64)
     if kinds and kinds <= {int, float}:
         try:  # (numpy converts each int as float() does)
             return np.array(value, dtype=np.float64)
@@ -247,10 +250,13 @@ def _list_message(value: list, kinds: set) -> Any:
 
 
 _INT64 = (-(2**63), 2**63 - 1)
+#: The largest uint64: integers up to it are kept exact (a ``uint64`` id written as a JSON
+#: or CBOR integer is the integer it is, as CDR and protobuf read it), past it a float64
+_UINT64_MAX = 2**64 - 1
 
 
 def _big(value: int) -> float:
-    """An integer past int64 as the nearest float64; past the largest float, +-inf (as
+    """An integer past int64 and uint64 as the nearest float64; past the largest float, +-inf (as
     IEEE 754 rounds an overflow; a JSON ``1e999`` is read as inf too)."""
     try:
         return float(value)

@@ -5,6 +5,12 @@ arrays (numeric arrays as float64), or the raw object for anything else (strings
 messages).  A field path ending in ``ranges`` of a ``sensor_msgs/LaserScan`` (without an
 index) yields only the valid returns (REP 117): values inside ``[range_min, range_max]``,
 with -inf ("detected, too close to measure") read as ``range_min``.
+
+An entity's key is read exactly (:func:`entity_key`, ``make_extractor(..., exact=True)``):
+an integer key stays the Python int it is, whatever its width (``uint64`` ids of ROS 2 CDR,
+protobuf, JSON past 2**53 are distinct integers a float64 would merge: 2**53 and 2**53 + 1
+are one double), and a filter on an entity's key (``{id==$track}``) compares the items'
+keys with the entity's as integers (Python compares an int with a float exactly).
 """
 
 from __future__ import annotations
@@ -18,7 +24,7 @@ import numpy as np
 from fretc.signals.bindings.expression import Const, EntityParam, Field, Filter, Slice, const_value
 
 __all__ = ["LASER_SCAN", "rep117", "Valid", "FieldAccessError", "make_extractor", "message_filter", "by_entity",
-           "normalize_scalar"]
+           "normalize_scalar", "entity_key"]
 
 LASER_SCAN = "sensor_msgs/msg/LaserScan"
 
@@ -54,6 +60,17 @@ def normalize_scalar(v: Any) -> Any:
     if isinstance(v, np.generic):
         v = v.item()
         return v if type(v) is bool else float(v) if isinstance(v, (int, float)) else v
+    return v
+
+
+def entity_key(v: Any) -> Any:
+    """A field value as an entity's key, exact (module docstring): Python and numpy
+    integers as the Python int they are (never through a float64: ``uint64`` ids past
+    2**53 stay distinct), numpy floats as Python floats (an integral float key equals and
+    hashes as the int it is: Python's exact comparison), numpy bools as bool; anything else
+    (strings) as it is."""
+    if isinstance(v, np.generic):
+        return v.item()
     return v
 
 
@@ -156,6 +173,9 @@ def _filter_test(flt: Filter, constants: dict[str, Any], text: str) -> Callable[
     get = operator.attrgetter(".".join(flt.path))
     op = _FILTER_OPS[flt.op]
     value_node = flt.value
+    # (compared with an entity's key: the item's key read exactly, :func:`entity_key`)
+    read = (entity_key if isinstance(value_node, Const)
+            and isinstance(value_node.value, EntityParam) else normalize_scalar)
 
     def keep(item: Any) -> bool:
         want: Any
@@ -166,7 +186,7 @@ def _filter_test(flt: Filter, constants: dict[str, Any], text: str) -> Callable[
                 raise FieldAccessError(f"{text}: {value_node.name} is not a constant of the "  # type: ignore[attr-defined]
                                        "message definition")
             want = constants[value_node.name]  # type: ignore[attr-defined]
-        v = normalize_scalar(get(item))
+        v = read(get(item))
         if isinstance(want, str) != isinstance(v, str):
             return False
         return bool(op(v, want))
@@ -220,7 +240,8 @@ def _grouper(flt: Filter, text: str) -> Callable[[Any, int, list, bool], list]:
     """The step of a filter on an entity's key (``{id==$track}``, FoxQL's filter semantics:
     a string matches only a string): the items of the message's arrays grouped by their
     key field once per message (the last message's groups kept), the entity's items
-    looked up; as :func:`_filter_test` keeps them, in their order."""
+    looked up; as :func:`_filter_test` keeps them, in their order. The items' keys are read
+    exactly (:func:`entity_key`: two ``uint64`` ids a float64 merges stay two groups)."""
     get = operator.attrgetter(".".join(flt.path))
     param = flt.value.value  # type: ignore[attr-defined]
     memo: list[Any] = [None, -1, None]  # message, step, groups
@@ -230,7 +251,7 @@ def _grouper(flt: Filter, text: str) -> Callable[[Any, int, list, bool], list]:
             flat, _m = _select(items, many, "filter", lambda x: True, text)
             groups: dict[tuple[bool, Any], list] = {}
             for x in flat:
-                v = normalize_scalar(get(x))
+                v = entity_key(get(x))
                 groups.setdefault((isinstance(v, str), v), []).append(x)
             memo[0], memo[1], memo[2] = data, k, groups
         want = param.value
@@ -241,10 +262,11 @@ def _grouper(flt: Filter, text: str) -> Callable[[Any, int, list, bool], list]:
     return step
 
 
-def _multi(f: Field, constants: dict[str, Any]) -> Callable[[Any], Any]:
+def _multi(f: Field, constants: dict[str, Any], exact: bool = False) -> Callable[[Any], Any]:
     """Extractor of a path with a slice or a filter before its end (Foxglove's message path
     semantics): from the first of them on, each step applies to every item, a slice or a
-    filter selects items, and the value is the array of what is left."""
+    filter selects items, and the value is the array of what is left (``exact``: the list
+    of the items' values as :func:`entity_key` reads them, an entity key's)."""
     text = f.text()
     steps: list[tuple[str, Any]] = []
     for p in f.path:
@@ -273,6 +295,8 @@ def _multi(f: Field, constants: dict[str, Any]) -> Callable[[Any], Any]:
             raise FieldAccessError(f"{text}: an item has no field {exc.name!r}") from None
         except IndexError:
             raise FieldAccessError(f"{text}: index out of range") from None
+        if exact:
+            return [entity_key(x) for x in items]
         vals = [normalize_scalar(x) for x in items]
         if all(type(v) is bool for v in vals) and vals:
             return Valid(np.array(vals, dtype=np.bool_), None)
@@ -282,10 +306,14 @@ def _multi(f: Field, constants: dict[str, Any]) -> Callable[[Any], Any]:
     return extract
 
 
-def make_extractor(f: Field, constants: dict[str, Any] | None = None) -> Callable[[Any], Any]:
+def make_extractor(f: Field, constants: dict[str, Any] | None = None, exact: bool = False
+                   ) -> Callable[[Any], Any]:
     """A function message-data → value of field ``f`` (normalized; module docstring).
     ``constants``: values of the named constants a filter compares with (filled in when
-    the binding is checked against the log's schemas).
+    the binding is checked against the log's schemas). ``exact``: an entity key's read
+    (module docstring): an array as the list of its values and a scalar as
+    :func:`entity_key` gives them (integers as Python ints, never float64), no LaserScan
+    validity mask.
 
     Returns Python bool/float, :class:`Valid` for arrays (masked for LaserScan ranges), a
     list for arrays of strings or messages, or the raw object for anything else (strings,
@@ -295,7 +323,9 @@ def make_extractor(f: Field, constants: dict[str, Any] | None = None) -> Callabl
         FieldAccessError: no such field, index out of range, or indexing a non-sequence.
     """
     if f.multi:
-        return _multi(f, constants if constants is not None else {})
+        return _multi(f, constants if constants is not None else {}, exact)
+    if exact:
+        return _exact(f)
     if f.path and isinstance(f.path[-1], Slice):
         return _sliced(f)
     path = f.path
@@ -322,4 +352,38 @@ def make_extractor(f: Field, constants: dict[str, Any] | None = None) -> Callabl
             return Valid(_as_array(np.asarray(v)), None)
         return normalize_scalar(v)
 
+    return extract
+
+
+def _exact(f: Field) -> Callable[[Any], Any]:
+    """:func:`make_extractor`'s exact read of a path without a filter before its end: an
+    array (numpy, list, a slice of one) as the list of its values, a scalar as
+    :func:`entity_key` gives them.
+
+    Raises (from the returned function): FieldAccessError, as :func:`make_extractor`."""
+    sl = None
+    path = f.path
+    if path and isinstance(path[-1], Slice):
+        sl, path = slice(path[-1].lo, path[-1].hi), path[:-1]
+    walk = _walker(path)
+    text = f.text()
+
+    def extract(data: Any) -> Any:
+        try:
+            v = walk(data)
+        except AttributeError as exc:
+            raise _no_field(data, path, text, exc) from None
+        except IndexError:
+            raise FieldAccessError(f"{text}: index out of range") from None
+        except (TypeError, KeyError) as exc:
+            raise FieldAccessError(f"{text}: cannot index ({exc})") from None
+        if isinstance(v, np.ndarray):
+            v = v.tolist()  # (Python ints of any width: int64, uint64 exact)
+        elif isinstance(v, tuple):
+            v = list(v)
+        elif sl is not None and not isinstance(v, list):
+            raise FieldAccessError(f"{text}: only arrays can be sliced")
+        if isinstance(v, list):
+            return [entity_key(x) for x in (v[sl] if sl is not None else v)]
+        return entity_key(v)
     return extract
