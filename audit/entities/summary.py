@@ -32,7 +32,15 @@ def summary_verdict(r: Any, path: str, out: list[Verdict], summary: str) -> Verd
     """The requirement's verdict over its entities' verdicts ``out`` (every entity satisfies
     it: satisfied; one violates it: violated, with the earliest violation's evidence,
     whatever is left unjudged, which its notes name), named ``r.id``; ``summary`` is
-    :func:`summary_note`'s. One pass over ``out`` (100,000 entities: a pass each costs)."""
+    :func:`summary_note`'s. One pass over ``out`` (100,000 entities: a pass each costs).
+
+    Its robustness is the least of the entities' (the universal quantifier's space
+    robustness is the minimum over its instances) only where its sign agrees with the
+    verdict (:func:`_agreeing`, the rule of :func:`fretc.audit.finalize._robustness_fields`
+    for one trace): violated, a negative margin; satisfied or vacuous, one >= 0; unknown or
+    error, none. A violated entity without a margin of its own (a violation at distance 0,
+    a sign that disagreed) and satisfied ones with positive margins give no margin, never a
+    positive one on a violated verdict (issue 91, E2)."""
     kinds: set[str] = set()
     first: Verdict | None = None  # (the earliest violation, the first in order among equals)
     margin: float | None = None
@@ -59,7 +67,7 @@ def summary_verdict(r: Any, path: str, out: list[Verdict], summary: str) -> Verd
     if verdict == "violated" and first is not None:
         v.first_violation = first.first_violation
         v.notes.append(f"first violated by {first.requirement}")
-    v.robustness = margin
+    v.robustness = _agreeing(verdict, margin, v.notes)
     listed = _listed(errors)
     if verdict == "error":
         v.error = listed
@@ -71,6 +79,27 @@ def summary_verdict(r: Any, path: str, out: list[Verdict], summary: str) -> Verd
     v.notes.append(summary)
     v.notes.append("violated by: " + (_listed(violated, ", ") or "none"))
     return v
+
+
+def _agreeing(verdict: str, margin: float | None, notes: list[str]) -> float | None:
+    """``margin`` (the least of the entities', None: none had one) when its sign agrees with
+    ``verdict`` (violated: < 0; satisfied, vacuous: >= 0, NaN never), else None and a note
+    saying why; None for an unknown or error verdict (no margin decides it)."""
+    if margin is None:
+        return None
+    if verdict == "violated":
+        agrees = margin < 0
+    elif verdict in ("satisfied", "vacuous"):
+        agrees = margin >= 0
+    else:
+        notes.append(f"robustness unavailable: the verdict over the entities is {verdict}")
+        return None
+    if not agrees:
+        notes.append(f"robustness unavailable: the least margin of the entities ({margin!r}) "
+                     f"disagrees in sign with the verdict over them ({verdict}): the "
+                     "entities that decide it have no margin of their own")
+        return None
+    return margin + 0.0  # (never -0.0)
 
 
 #: Entities named in the requirement's own error, reason and notes (the rest counted).

@@ -193,7 +193,8 @@ _ENTITY = st.builds(
 def test_the_requirement_verdict_over_its_entities_is_their_definition(entities):
     """summary_verdict (one pass over the entities) equals its definition read field by
     field: the first verdict of the precedence some entity has, the earliest violation (the
-    first in order among equals), the least margin (as ``min`` takes NaN), every error
+    first in order among equals), the least margin (as ``min`` takes NaN) where its sign
+    agrees with the verdict (none otherwise, and none unknown or error), every error
     listed, the unknown reasons, partial when one is."""
     from fretc.audit.entities.summary import _PRECEDENCE, _listed, summary_verdict
     from fretc.audit.verdict import FirstViolation, TimePoint, Verdict
@@ -222,6 +223,9 @@ def test_the_requirement_verdict_over_its_entities_is_their_definition(entities)
         assert got.first_violation is None
     margins = [x.robustness for x in out if x.robustness is not None]
     want = min(margins) if margins else None
+    if want is not None and not (want < 0 if verdict == "violated" else want >= 0
+                                 if verdict in ("satisfied", "vacuous") else False):
+        want = None  # (a margin whose sign disagrees with the verdict is never reported)
     assert (got.robustness is None) == (want is None)
     if want is not None:
         assert repr(got.robustness) == repr(want)
@@ -284,3 +288,58 @@ def test_the_entities_judged_at_once_are_records_read_as_verdicts(tmp_path):
     assert at_once[1].log == str(log) and at_once[1].values == {}
     assert "watched" not in at_once[1].notes
     assert at_once[0].ltl3 == Ltl3("unknown", None, None)
+
+
+_CONSISTENT = st.one_of(
+    st.tuples(st.just("violated"), st.none() | st.floats(-1e9, -1e-9)),
+    st.tuples(st.sampled_from(["satisfied", "vacuous"]), st.none() | st.floats(0.0, 1e9)),
+    st.tuples(st.sampled_from(["unknown", "error"]), st.none() | st.floats(-1e9, 1e9)))
+
+
+@settings(max_examples=300, deadline=None)
+@given(st.lists(_CONSISTENT, min_size=1, max_size=8))
+def test_the_margin_over_entities_agrees_in_sign_with_its_verdict(entities):
+    """Issue 91, E2: entities whose own margins agree with their verdicts (a violated one
+    may have none: a violation at distance 0) give a requirement whose margin agrees with
+    its verdict: violated, negative (never the positive margin of a satisfied entity beside
+    a violated one without a margin); satisfied or vacuous, >= 0; unknown or error, none.
+    Smallest input that failed before: [violated with no margin, satisfied with 2.0]."""
+    from fretc.audit.entities.summary import summary_verdict
+    from fretc.audit.verdict import Verdict
+
+    class R:
+        id, text, source = "R", "the robot shall always satisfy x", "r.fret:1"
+
+    out = [Verdict("log", f"R[e={k}]", verdict=kind, robustness=rob,
+                   error="no tick" if kind == "error" else None,
+                   unknown_reason="gap" if kind == "unknown" else None)
+           for k, (kind, rob) in enumerate(entities)]
+    got = summary_verdict(R, "log", out, "R over n entities e")
+    if got.robustness is not None:
+        if got.verdict == "violated":
+            assert got.robustness < 0, got
+        else:
+            assert got.verdict in ("satisfied", "vacuous") and got.robustness >= 0, got
+    # metamorphic: the margin, when there is one, is the least of the entities'
+    margins = [r for _k, r in entities if r is not None]
+    if got.robustness is not None:
+        assert got.robustness == min(margins)
+    elif got.verdict == "violated" and margins and min(margins) < 0:
+        raise AssertionError(f"a negative least margin dropped: {got}")
+
+
+def test_a_violated_entity_without_margin_beside_a_satisfied_one_gives_no_positive_margin():
+    """The smallest input of E2: the satisfied entity's 2.0 was the violated requirement's
+    robustness; now none, and a note says why."""
+    from fretc.audit.entities.summary import summary_verdict
+    from fretc.audit.verdict import Verdict
+
+    class R:
+        id, text, source = "R", "the robot shall always satisfy x", "r.fret:1"
+
+    got = summary_verdict(R, "log", [Verdict("log", "R[e=1]", verdict="violated"),
+                                     Verdict("log", "R[e=2]", verdict="satisfied",
+                                             robustness=2.0)], "R over 2 entities e")
+    assert got.verdict == "violated" and got.robustness is None
+    assert any("disagrees in sign with the verdict" in n for n in got.notes)
+    assert got.to_json(None)["robustness"]["value"] is None
