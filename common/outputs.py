@@ -22,6 +22,13 @@ file it points to; nor may a hard link to another file.
   at a path fretc names inside it (a ROS 2 package's files), its folders as
   :func:`sub_folder` makes them.
 
+* :func:`refuse_replacing_inputs` is every command's check, before it reads or writes
+  anything, that no output it will write is one of its own inputs (``fretc shield-replay SH
+  d/a.mcap d/a.shielded.mcap -o d``, ``fretc audit runs/*.csv --write-csv runs``, ``--json``
+  naming a log or a requirement file): the paths compared resolved, links followed
+  (``os.path.realpath``), and hard links by ``os.path.samefile``; an output inside an input
+  that is a folder read whole (a rosbag2 folder) is one of its files.
+
 Errors are :class:`OutputError` (a :class:`fretc.common.errors.FretcError`, so the command
 exits 2 naming the path, and an :class:`OSError`, so callers that catch those go on doing so).
 """
@@ -30,13 +37,13 @@ from __future__ import annotations
 
 import contextlib
 import os
-from collections.abc import Iterator
+from collections.abc import Iterable, Iterator
 from typing import IO, Any, BinaryIO, cast
 
 from fretc.common.errors import FretcError
 
 __all__ = ["OutputError", "write_file", "open_output", "create_output", "write_under",
-           "output_folder", "sub_folder"]
+           "output_folder", "sub_folder", "refuse_replacing_inputs"]
 
 _NOFOLLOW = getattr(os, "O_NOFOLLOW", 0)
 _EXCL = os.O_WRONLY | os.O_CREAT | os.O_EXCL | _NOFOLLOW | getattr(os, "O_CLOEXEC", 0) \
@@ -192,3 +199,56 @@ def sub_folder(parent: str | os.PathLike, name: str) -> str:
                           "own there, never through a link (remove it, or choose another "
                           "output folder)")
     return target
+
+
+#: A path given as one of a command's inputs or outputs: (what it is, as the user knows it:
+#: ``"--json"``, ``"the log"``; the path, None or ``"-"`` (standard output, input) skipped)
+Named = tuple[str, "str | os.PathLike[str] | None"]
+
+
+def _same(a: str, b: str) -> bool:
+    """Whether paths ``a`` and ``b`` name one file: equal once resolved (links followed,
+    ``os.path.realpath``), or one file by its device and inode (a hard link,
+    ``os.path.samefile``) when both exist."""
+    if os.path.realpath(a) == os.path.realpath(b):
+        return True
+    try:
+        return os.path.samefile(a, b)
+    except OSError:
+        return False
+
+
+def _inside(path: str, folder: str) -> bool:
+    """Whether ``path`` resolved lies inside the folder ``folder`` resolved."""
+    real, top = os.path.realpath(path), os.path.realpath(folder)
+    return real.startswith(top.rstrip(os.sep) + os.sep)
+
+
+def refuse_replacing_inputs(outputs: Iterable[Named],
+                            inputs: Iterable[Named]) -> None:
+    """Refuse outputs that would replace an input of the same command (issue 91, R1 and
+    N4), before anything is written: an output file that is an input file (resolved, links
+    followed; a hard link to it), or that lies inside an input folder read whole (a rosbag2
+    folder). ``outputs`` and ``inputs`` are ``(what, path)`` pairs (``("--json", "a.json")``,
+    ``("the log", "runs/a.csv")``); a path None or ``"-"`` (standard input or output) is
+    skipped. A folder output is checked by the files the command writes in it: the caller
+    names them (``DIR/NAME.shielded.mcap``, ``DIR/STEM.csv``).
+
+    Raises:
+        OutputError: the first output that is an input, naming both as given (and where they
+            resolve to when that differs): a usage error, exit 2, nothing written."""
+    ins = [(w, os.fspath(p)) for w, p in inputs if p is not None and os.fspath(p) != "-"]
+    for what, path in outputs:
+        if path is None or os.fspath(path) == "-":
+            continue
+        out = os.fspath(path)
+        for in_what, src in ins:
+            whole = os.path.isdir(src)
+            if (_inside(out, src) or _same(out, src)) if whole else _same(out, src):
+                moved = [f"{x} resolves to {os.path.realpath(x)}" for x in dict.fromkeys(
+                    (out, src)) if os.path.realpath(x) != os.path.abspath(x)]
+                where = f" ({'; '.join(moved)})" if moved else ""
+                rel = "inside" if whole and not _same(out, src) else "the same file as"
+                raise OutputError(
+                    f"{what} {out} is {rel} {in_what} {src}{where}: an output never replaces "
+                    "an input of the same command; nothing was written (name another output)")

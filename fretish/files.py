@@ -500,6 +500,16 @@ def _files_of(paths, skipped: list[str] | None = None) -> list[str]:
     return out
 
 
+def requirement_files(paths) -> list[str]:
+    """The requirement files (and Doorstop trees) that ``paths`` (files or folders, as
+    ``load_requirements`` takes them) name, in the order they are read: a folder's
+    ``.fret``, FRET JSON exports, ReqIF files (a JSON file that is no FRET export left out).
+
+    Raises:
+        FretishFileError: a path that is neither a file nor a folder."""
+    return _files_of(paths)
+
+
 def _read_one(f: str, text_attribute: str | None,
               not_formalized: list[RequirementEntry] | None) -> list[RequirementEntry]:
     """The entries of one file or tool source (:func:`load_requirements`)."""

@@ -102,6 +102,7 @@ def audit_cmd(ctx: click.Context, logs: tuple[str, ...], requirements: tuple[str
     from fretc.audit.discovery import expand_log_args
     from fretc.audit.fleet.statistics import plan_statistics
     from fretc.audit.verdict import exit_code, write_audit_json
+    from fretc.common.errors import FretcError
 
     to_stdout_json = json_path == "-"
     out = Console(stderr=to_stdout_json, width=None if sys.stdout.isatty() else 160,
@@ -113,6 +114,12 @@ def audit_cmd(ctx: click.Context, logs: tuple[str, ...], requirements: tuple[str
         plan = load_plan(config)
         paths = find_logs(expand_log_args(logs))
     except AuditInputError as exc:
+        err.print(f"[red]error:[/red] {escape(str(exc))}")
+        ctx.exit(2)
+        return
+    try:
+        _refuse_replacing_inputs(plan, paths, json_path, junit_path, csv_dir)
+    except FretcError as exc:
         err.print(f"[red]error:[/red] {escape(str(exc))}")
         ctx.exit(2)
         return
@@ -141,6 +148,32 @@ def audit_cmd(ctx: click.Context, logs: tuple[str, ...], requirements: tuple[str
     if csv_dir is not None and not _write_csvs(plan, paths, results, csv_dir, err):
         code = 2
     ctx.exit(code)
+
+
+def _refuse_replacing_inputs(plan, paths: list[str], json_path: str | None,
+                             junit_path: str | None, csv_dir: str | None) -> None:
+    """No output of the audit (``--json``, ``--junit``, each ``--write-csv`` trace as
+    :func:`_write_csvs` names it) is one of its inputs (the logs, the requirement files, the
+    binding files), checked before any log is read (issue 91, N4: ``fretc audit runs/*.csv
+    --write-csv runs`` replaced each input CSV with its sampled trace).
+
+    Raises:
+        OutputError: one is (:func:`fretc.common.outputs.refuse_replacing_inputs`).
+        FretishFileError: a requirement path that is no file or folder."""
+    from fretc.common.outputs import refuse_replacing_inputs
+    from fretc.fretish.files import requirement_files
+
+    outputs: list = [("--json", json_path), ("--junit", junit_path)]
+    if csv_dir is not None:
+        from fretc.audit.sampled.csv import csv_name
+
+        used: set[str] = set()  # (the names _write_csvs gives, in the same order)
+        outputs += [("--write-csv", Path(csv_dir) / csv_name(str(p), used)) for p in paths]
+    inputs = ([("the log", p) for p in paths]
+              + [("the requirement file", f)
+                 for f in requirement_files(list(plan.config.requirements))]
+              + [("the binding file", f) for f in plan.binding_files])
+    refuse_replacing_inputs(outputs, inputs)
 
 
 def _write_json(document: Callable[[Callable[[str], Any]], None], json_path: str) -> None:

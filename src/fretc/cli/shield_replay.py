@@ -57,7 +57,8 @@ def shield_replay_cmd(ctx: click.Context, shield_dir: str, logs: tuple[str, ...]
       3  no violation, but a log is partial or had data problems, or a verdict
          is unknown, or a recording replayed is damaged (damage replays the span
          before it: the shielded run's audit is partial there)"""
-    from fretc.common.outputs import output_folder
+    from fretc.common.outputs import output_folder, refuse_replacing_inputs
+    from fretc.fretish.files import requirement_files
     from fretc.shield.replay import ReplayError, load_folder, replay_log, shielded_name
 
     folder = load_folder(shield_dir)
@@ -72,6 +73,13 @@ def shield_replay_cmd(ctx: click.Context, shield_dir: str, logs: tuple[str, ...]
     if twice:
         raise ReplayError(f"two logs would be written to {', '.join(twice)} in {out_dir}: "
                           "replay them into different folders")
+    # (issue 91, R1: -o d with d/a.shielded.mcap given as a log overwrote it before reading)
+    refuse_replacing_inputs(
+        [("-o", Path(out_dir) / n) for n in names] + [("--json", json_path)],
+        [("the log", log) for log in logs]
+        + [("the requirement file", r) for r in requirement_files(list(reqs))]
+        + [("the shield's module", folder.module),
+           ("the shield's binding file", folder.bindings_file)])
     output_folder(out_dir)
     results = []
     for log, name in zip(logs, names):
