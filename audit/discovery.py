@@ -10,6 +10,7 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from fretc.audit.config import AuditInputError
+from fretc.logs.factory import unseekable
 
 __all__ = ["LOG_SUFFIXES", "discover_bindings", "expand_log_args", "find_logs"]
 
@@ -43,13 +44,18 @@ def find_logs(paths: Sequence[str]) -> list[str]:
     twice in the fleet statistics (name it to audit it).
 
     Raises:
-        AuditInputError: a path that does not exist, or a folder holding no log.
+        AuditInputError: a path that does not exist, or a folder holding no log, or one
+            that is neither a file nor a folder (a FIFO, ``/dev/stdin``, ``<(...)``:
+            :func:`fretc.logs.factory.unseekable`).
     """
     out: list[str] = []
     for p in paths:
         path = Path(p)
         if not path.exists():
             raise AuditInputError(f"{p}: no such file or folder")
+        refused = unseekable(path)  # (a FIFO, /dev/stdin, <(...): issue 91)
+        if refused is not None:
+            raise AuditInputError(f"{p}: {refused}")
         if path.is_file() or (path / "metadata.yaml").is_file():
             out.append(str(path))
             continue

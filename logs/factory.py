@@ -20,7 +20,31 @@ if TYPE_CHECKING:
     from rosbags.typesys import Stores
     from rosbags.typesys.store import Typestore
 
-__all__ = ["open_log"]
+__all__ = ["open_log", "unseekable"]
+
+
+def unseekable(path: str | os.PathLike) -> str | None:
+    """Why the log at ``path`` cannot be read, when it is neither a regular file nor a folder
+    (a FIFO, ``/dev/stdin``, a shell's ``<(...)`` as ``/dev/fd/N``, a character device), else
+    None. fretc reads a log more than once and out of order (MCAP's summary and index at
+    its end, its chunks by offset; a CSV read again for ``--write-csv``; a shielded
+    recording's span read twice), which a stream cannot give: it is refused, naming the
+    path, before any byte is read from it (issue 91: such a log ended in an internal
+    error). Links are followed (``os.stat``)."""
+    import stat
+
+    try:
+        mode = os.stat(path).st_mode
+    except OSError:
+        return None  # (missing: the caller's own error)
+    if stat.S_ISREG(mode) or stat.S_ISDIR(mode):
+        return None
+    kind = ("a FIFO (a named pipe, or a shell's <(...))" if stat.S_ISFIFO(mode) else
+            "a character device" if stat.S_ISCHR(mode) else
+            "a socket" if stat.S_ISSOCK(mode) else "not a regular file")
+    return (f"{kind}, not a file: fretc reads a log more than once and out of order (an "
+            "MCAP's index, a CSV's second read), which a stream cannot give; save it to a "
+            "file first (e.g. `cat > run.mcap`) and audit that")
 
 
 def open_log(path: str | os.PathLike, *, fallback_typestore: Typestore | Stores | None = None,
@@ -61,6 +85,9 @@ def open_log(path: str | os.PathLike, *, fallback_typestore: Typestore | Stores 
     p = Path(path)
     if not p.exists():
         raise LogError(path, "no such file or folder")
+    refused = unseekable(p)
+    if refused is not None:
+        raise LogError(path, refused)
     suffix = p.suffix.lower()
     if p.is_dir() or suffix in (".bag", ".db3"):
         from rosbags.typesys import Stores, get_typestore
