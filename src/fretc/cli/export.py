@@ -103,6 +103,13 @@ def export_cmd(ctx: click.Context, src: str | None, from_json: str, output: str 
     if not any((output, needs_path, sdoc_path, matrix_csv, matrix_html)):
         raise click.UsageError("nothing to write: give -o (with -r), --needs, --sdoc, "
                                "--matrix or --matrix-html")
+    from fretc.common.outputs import refuse_replacing_inputs
+
+    # (issue 91, R1: no output replaces an input; -r's a file, or a Doorstop tree read whole)
+    refuse_replacing_inputs([("-o", output), ("--needs", needs_path), ("--sdoc", sdoc_path),
+                             ("--matrix", matrix_csv), ("--matrix-html", matrix_html)],
+                            [("the requirements (-r)", src), ("--from-json", from_json),
+                             ("--check", check_json)])
     kind = _kind(src) if output is not None and src is not None else None  # (src: refused above)
     try:
         doc = no_surrogates(load_audit_json(from_json))  # a log name that is not UTF-8

@@ -68,6 +68,7 @@ def report_cmd(ctx: click.Context, logs: tuple[str, ...], requirements: tuple[st
             ctx.exit(2)
             return
         json_dir = str(Path(from_json).resolve().parent)
+        _refuse_replacing_inputs(output, [("--from-json", from_json)], check_json, psl_map)
     else:
         # lazy: the audit engine only when the logs are audited here
         from fretc.audit import AuditInputError, find_logs, load_plan
@@ -85,6 +86,12 @@ def report_cmd(ctx: click.Context, logs: tuple[str, ...], requirements: tuple[st
             click.echo(f"error: {exc}", err=True)
             ctx.exit(2)
             return
+        from fretc.fretish.files import requirement_files
+
+        _refuse_replacing_inputs(
+            output, [("the log", p) for p in paths]
+            + [("the requirement file", f) for f in requirement_files(list(requirements))]
+            + [("the binding file", f) for f in plan.binding_files], check_json, psl_map)
         input_errors = any(r.error is not None for r in plan.requirements)
         results = run_audits(plan, paths, jobs=jobs, ctx=ctx)
         doc = json.loads(audit_json(results, plan.requirements_json(), plan.bindings_json(),
@@ -115,3 +122,23 @@ def report_cmd(ctx: click.Context, logs: tuple[str, ...], requirements: tuple[st
         click.echo(f"wrote {r.output}: {r.messages} messages + {r.events} verdict events on "
                    f"/fretc/verdicts{extra}", err=True)
     ctx.exit(int(s.get("exit_code", 0) or 0))
+
+
+#: The files ``fretc report -o DIR`` writes in DIR (:func:`fretc.reports.files.write_report`;
+#: its timelines go into DIR/timelines, a folder of its own)
+REPORT_FILES = ("report.html", "report.md", "audit.json", "matrix.html", "coverage.html")
+
+
+def _refuse_replacing_inputs(output: str, inputs: list, check_json: str | None,
+                             psl_map: str | None) -> None:
+    """No file the report writes in ``output`` (:data:`REPORT_FILES`) is one of its
+    ``inputs`` (``(what, path)``), ``--check`` or ``--psl-map`` (issue 91, R1: ``fretc report
+    --from-json out/audit.json -o out`` replaced its own input); checked before the audit
+    runs. (``--annotate`` never writes over the original log: a note says so.)
+
+    Raises:
+        OutputError: one is (:func:`fretc.common.outputs.refuse_replacing_inputs`)."""
+    from fretc.common.outputs import refuse_replacing_inputs
+
+    refuse_replacing_inputs([("-o", Path(output) / n) for n in REPORT_FILES],
+                            inputs + [("--check", check_json), ("--psl-map", psl_map)])
