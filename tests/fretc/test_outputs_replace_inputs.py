@@ -150,3 +150,25 @@ def test_shield_replay_output_that_is_its_second_input_is_refused(shield_dir, tm
     assert got.exit_code == 2, got.output
     assert "--json" in got.output
     assert _snapshot(d) == before and not (tmp_path / "out").exists()
+
+
+def test_report_and_export_outputs_naming_their_inputs_are_refused(runs):
+    """fretc report -o DIR where DIR/audit.json is its --from-json; fretc export --needs
+    naming its --from-json, --matrix naming its requirements (-r)."""
+    (runs / "out").mkdir()
+    got = _run("audit", runs / "runs" / "a.csv", "-r", runs / "r.fret", "--json",
+               runs / "out" / "audit.json")
+    assert got.exit_code == 0, got.output
+    before = _snapshot(runs)
+    got = _run("report", "--from-json", runs / "out" / "audit.json", "-o", runs / "out")
+    assert got.exit_code == 2, got.output
+    assert "--from-json" in got.output and "audit.json" in got.output
+    got = _run("report", runs / "runs" / "a.csv", "-r", runs / "r.fret", "-o", runs / "runs" / "..")
+    assert got.exit_code == 0, got.output  # (writes report.html ..., none of them an input)
+    before = _snapshot(runs)
+    for extra in (["--needs", runs / "out" / "audit.json"],
+                  ["-r", runs / "r.fret", "--matrix", runs / "r.fret"]):
+        got = _run("export", "--from-json", runs / "out" / "audit.json", *extra)
+        assert got.exit_code == 2, got.output
+        assert "an output never replaces an input" in got.output
+    assert _snapshot(runs) == before
