@@ -59,7 +59,7 @@ def split_clocks(path: str | os.PathLike, period_ns: int = NS_PER_S,
     if clocks is None:
         clocks = clock_lines(path)
     try:
-        with open(path, newline="", encoding="utf-8") as f:
+        with open(path, newline="", encoding="utf-8-sig") as f:
             first = f.readline()
             f.seek(0)
             return _split(str(path), csv.reader(f), clocks, first, period_ns)

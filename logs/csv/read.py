@@ -176,6 +176,13 @@ class RowReader:
     ``max_rows``: stop after the chunk (:data:`CHUNK_ROWS` rows) where the rows of the clock
     read pass it, ``over`` then True (the rows after it neither read nor checked).
 
+    A column that nothing reads (``keep`` given and naming it not, nor ``streamed``: no
+    requirement or binding reads it) in a trace of one clock may hold text (issue 91: a
+    free-text column, a comment or an operator's note beside the variables, refused the
+    whole file): at its first cell that is neither true/false nor a number it is a text
+    column, listed in ``text`` and left out of ``columns`` and ``types``, its cells no
+    longer read. With ``keep`` None (every column read) each is checked as before.
+
     ``sink``: called after each chunk of rows with the rows it read (:data:`RowSink`): the
     columns named in ``streamed`` are handed over a chunk at a time and kept only when
     ``keep`` names them too; ``keep_times`` False keeps no ``time`` column either
@@ -202,7 +209,6 @@ class RowReader:
         #: stop once more rows than this were read (None: read them all); ``over`` says so
         self.max_rows, self.over = max_rows, False
         self.clock, self.period_ns = clock, period_ns
-        self.columns = list(columns)
         self.types: dict[str, str] = {}
         self.gap_rows: list[int] = []
         self.unknown_rows: dict[str, list[int]] = {}
@@ -211,6 +217,11 @@ class RowReader:
         self.kept_values: dict[str, array] = {}
         self.header = header
         self.time_at = header.index("time") if has_time else None
+        #: the columns nothing reads, and those of them found to hold text (class docstring)
+        self.unread = (frozenset(c for c in columns if c not in keep and c not in streamed)
+                       if keep is not None and not grouped else frozenset())
+        self.text: list[str] = []
+        self.columns = list(columns)
         self.variables = frozenset(columns)
         #: (position, name) of the variables' columns in the header
         self.var_at = [(i, n) for i, n in enumerate(header) if n in self.variables]
@@ -372,6 +383,9 @@ class RowReader:
         got = self.kinds.get(cell)
         if got is None:
             got = _kind(cell)
+            if got is None and name in self.unread:  # (text nothing reads: class docstring)
+                self._text(name)
+                return 0
             if got is None:
                 raise CsvError(self.path, line, "empty cell" if not cell else
                                f"cannot read {cell!r} as true/false or a number", column=name)
@@ -392,6 +406,14 @@ class RowReader:
                            f"column mixes true/false (line {self.word_at[name]}) with numbers "
                            f"(line {self.numeric_at[name]})", column=name)
         return value
+
+    def _text(self, name: str) -> None:
+        """Column ``name``, which nothing reads, holds text: its cells are no longer read
+        (class docstring)."""
+        self.text.append(name)
+        self.variables = self.variables - {name}
+        self.var_at = [(i, n) for i, n in self.var_at if n != name]
+        self.values.pop(name, None)
 
     # ------------------------------------------------------------------ a chunk at once
     def _chunk(self, chunk: list[tuple[int, list[str] | CsvError]]) -> bool:
@@ -493,6 +515,8 @@ class RowReader:
         return vals, unknown, first_word, first_num
 
     def _finish(self) -> None:
+        if self.text:
+            self.columns = [c for c in self.columns if c not in self.text]
         if self.own is not None:
             self.columns = [c for c in self.columns if c in self.own]
         elif self.grouped:

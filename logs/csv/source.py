@@ -90,7 +90,7 @@ def sampled_trace(path: str | os.PathLike) -> bool:
     if not str(path).lower().endswith(".csv"):
         return False
     try:
-        with open(path, encoding="utf-8", errors="replace") as f:
+        with open(path, encoding="utf-8-sig", errors="replace") as f:
             return f.readline().startswith(SAMPLED_MARK)
     except OSError:
         return False
@@ -173,7 +173,7 @@ def _sampled_comments(path: str | os.PathLike) -> list[str]:
     any other file, or one that cannot be read as text)."""
     out: list[str] = []
     try:
-        with open(path, encoding="utf-8", errors="replace") as f:
+        with open(path, encoding="utf-8-sig", errors="replace") as f:
             if not f.readline().startswith(SAMPLED_MARK):
                 return []
             for line in f:
@@ -239,6 +239,12 @@ class CsvSource(LogSource):
     columns of other clocks are empty. ``clock`` selects one clock: the source is then its
     rows and columns alone (the audit reads such a trace clock by clock,
     :mod:`fretc.audit.sampled.audit`); a trace of several clocks read whole has no rows.
+
+    The file is UTF-8; a UTF-8 byte order mark before its first line (as Excel and other
+    spreadsheets write "CSV UTF-8") is skipped, not read as part of the first column's name
+    (``utf-8-sig``; issue 91). A column that no requirement or binding reads (``keep``
+    naming it not) is not read at all: a free-text column beside the variables does not
+    refuse the file (:class:`~fretc.logs.csv.read.RowReader`).
 
     The file is read once, when opened (:mod:`fretc.logs.csv.read`): checked completely, its
     values kept as compact columns (a byte a row for a boolean column, eight for a numeric
@@ -318,7 +324,7 @@ class CsvSource(LogSource):
         Raises:
             LogError: the file cannot be opened."""
         try:
-            f = open(self.path, newline="", encoding="utf-8")
+            f = open(self.path, newline="", encoding="utf-8-sig")
         except OSError as exc:
             raise LogError(self.path, f"cannot read: {exc.strerror or exc}") from None
         return _FileRows(self.path, f)
@@ -328,7 +334,7 @@ class CsvSource(LogSource):
         return clock_lines(self.path)
 
     def _first_line(self) -> str:
-        with open(self.path, encoding="utf-8", errors="replace") as f:
+        with open(self.path, encoding="utf-8-sig", errors="replace") as f:
             return f.readline()
 
     def _check(self) -> None:
