@@ -20,6 +20,32 @@ shows them so that they cannot change the output's structure or the reader's scr
   0.30, "Code spans"); ``|`` escaped for GFM tables.
 * :func:`one_line` - a ``//`` comment line of a ``.psl`` file: :func:`visible` with runs of
   white space folded into one space.
+
+Generated code embeds ids, texts and names too, and there the text must not become code
+(issue 91, J1: a requirement id holding a line break, or Java's six characters ``\\u000a``,
+written raw into a ``//`` comment of a generated Java class ran as code when the class
+loaded). One function per target language, used everywhere that target embeds data:
+
+* :func:`java_string` and :func:`java_comment` - Java source (the Gwendolen form's
+  ``N_shield.java``, ``N_env.java``): a string literal whose value is the text, and a ``//``
+  comment line, both in ASCII with no ``\\u`` that Java's compiler would translate (JLS 17,
+  section 3.3: every ``\\uXXXX`` of the source, comments included, is translated before
+  lexing; so ``\\u000a`` in a comment is a line break, ``\\u0022`` in a literal a quote).
+* :func:`c_comment` - a C ``/* */`` comment (the C monitors' and the shield's C form; their
+  string literals are :func:`fretc.compiler.c_step.c_string`'s).
+* :func:`python_doc` - the text of a Python ``\"\"\"`` docstring (the Python shield's), which
+  reads back as the text.
+* :func:`properties_key`, :func:`properties_value` and :func:`properties_comment` - a Java
+  properties file (JPF's ``.jpf`` and site files, AIL's ``.ail``): ``java.util.Properties``'
+  own escapes (``Properties.store``), so a trailing ``\\`` continues no line and ``=``, ``:``,
+  ``#``, ``!``, leading spaces and ``\\u`` escapes are data.
+* :func:`gwendolen_comment` - a ``//`` comment line of a Gwendolen agent (``.gwen``): one
+  line, :func:`one_line`.
+* :func:`xml_content` - text in an XML element written by hand (the ROS 2 package's
+  ``package.xml``): :func:`xml_text` on one line, then ``&``, ``<``, ``>`` as entities.
+
+Python literals are ``repr`` (a valid literal of the same value for every string); the ROS 2
+node embeds names only so (``| py`` in ``shield_node.py.j2``).
 """
 
 from __future__ import annotations
@@ -28,7 +54,9 @@ import re
 from typing import Any
 
 __all__ = ["csv_line", "visible", "terminal_text", "xml_text", "md_code", "one_line", "is_unsafe",
-           "file_stems", "no_surrogates"]
+           "file_stems", "no_surrogates", "java_string", "java_comment", "c_comment",
+           "python_doc", "properties_key", "properties_value", "properties_comment",
+           "gwendolen_comment", "xml_content"]
 
 _UNSAFE_CATEGORIES = frozenset({"Cc", "Cf", "Zl", "Zp", "Cs", "Co", "Cn"})
 
@@ -184,3 +212,150 @@ def csv_line(cells: list[str]) -> str:
     column name), quotes doubled."""
     return ",".join('"' + c.replace('"', '""') + '"' if any(x in c for x in ',"\r\n') else c
                     for c in cells)
+
+
+def _utf16_units(ch: str) -> list[int]:
+    """The UTF-16 code units of one character (a lone surrogate: itself)."""
+    o = ord(ch)
+    if o <= 0xFFFF:
+        return [o]
+    o -= 0x10000
+    return [0xD800 + (o >> 10), 0xDC00 + (o & 0x3FF)]
+
+
+def java_string(text: Any) -> str:
+    """A Java string literal (with its quotes) whose value is ``text`` (``str()`` of it), in
+    printable ASCII: ``"`` and ``\\`` escaped, line break, carriage return and tab as
+    ``\\n``, ``\\r``, ``\\t``, every other character below U+0100 as a three-digit
+    octal escape, every one above as ``\\uXXXX`` per UTF-16 code unit (translated by the
+    compiler into a character that is neither a quote, a backslash nor a line terminator:
+    JLS 17, sections 3.3 and 3.10.7). A backslash of the text is doubled, so the text's own
+    ``\\u000a`` stays six characters."""
+    out = ['"']
+    for ch in str(text):
+        o = ord(ch)
+        if ch in '"\\':
+            out.append("\\" + ch)
+        elif 0x20 <= o < 0x7F:
+            out.append(ch)
+        elif ch in "\n\r\t":
+            out.append({"\n": "\\n", "\r": "\\r", "\t": "\\t"}[ch])
+        elif o < 0x100:
+            out.append(f"\\{o:03o}")
+        else:
+            out.extend(f"\\u{u:04x}" for u in _utf16_units(ch))
+    out.append('"')
+    return "".join(out)
+
+
+def _ascii_escaped(text: Any) -> str:
+    """``text`` in printable ASCII with Python's escapes, read back by the
+    ``unicode_escape`` codec: ``\\`` doubled, every other character outside printable
+    ASCII as ``\\xHH`` (below U+0100) or ``\\UHHHHHHHH`` (a capital ``U``: no Java unicode
+    escape)."""
+    out = []
+    for ch in str(text):
+        o = ord(ch)
+        if ch == "\\":
+            out.append("\\\\")
+        elif 0x20 <= o < 0x7F:
+            out.append(ch)
+        elif o < 0x100:
+            out.append(f"\\x{o:02x}")
+        else:
+            out.append(f"\\U{o:08x}")
+    return "".join(out)
+
+
+def java_comment(text: Any) -> str:
+    """The text of one ``//`` comment line of Java source showing ``text``: printable ASCII,
+    no line terminator, and no backslash that can begin a unicode escape (each of the text's
+    is doubled; others are written ``\\xHH`` or ``\\UHHHHHHHH``, capital ``U``, which Java
+    does not translate: JLS 17, section 3.3). It reads back as ``text`` with Python's
+    ``unicode_escape`` codec."""
+    return _ascii_escaped(text)
+
+
+def c_comment(text: Any) -> str:
+    """The text of a C ``/* */`` comment showing ``text``: printable ASCII (every other
+    character, line breaks included, written ``?``), never ``*/`` or ``/*`` (a space put in
+    them) nor a trigraph (``??`` split: C99, section 5.2.1.1)."""
+    t = "".join(ch if 32 <= ord(ch) < 127 else "?" for ch in str(text))
+    t = t.replace("*/", "* /").replace("/*", "/ *")
+    while "??" in t:  # no trigraph
+        t = t.replace("??", "? ?")
+    return t
+
+
+def python_doc(text: Any) -> str:
+    """The text of a Python docstring (between ``\"\"\"`` quotes, not raw) that reads back
+    as ``text``: ``\\`` escaped, a ``"`` escaped where another follows it or it ends the
+    text (so no three quotes close the docstring, nor does a last quote meet the closing
+    ones), line breaks and tabs kept, and every other character :func:`visible` escapes
+    (controls, NUL, carriage returns, bidirectional controls, lone surrogates, which no UTF-8
+    file holds) as a Python escape of the same character."""
+    s = str(text)
+    out = []
+    for i, ch in enumerate(s):
+        if ch == "\\" or (ch == '"' and (i + 1 == len(s) or s[i + 1] == '"')):
+            out.append("\\" + ch)
+        elif ch in "\n\t" or not _unsafe(ch, ""):
+            out.append(ch)
+        else:
+            out.append(_escape(ch))
+    return "".join(out)
+
+
+def _properties(text: Any, key: bool) -> str:
+    """``java.util.Properties.store``'s escapes (its ``saveConvert``, with ``escapeUnicode``)."""
+    out = []
+    for i, ch in enumerate(str(text)):
+        o = ord(ch)
+        if ch == " ":
+            out.append("\\ " if key or i == 0 else " ")
+        elif ch in "\\=:#!":
+            out.append("\\" + ch)
+        elif ch in "\t\n\r\f":
+            out.append({"\t": "\\t", "\n": "\\n", "\r": "\\r", "\f": "\\f"}[ch])
+        elif 0x20 < o < 0x7F:
+            out.append(ch)
+        else:
+            out.extend(f"\\u{u:04X}" for u in _utf16_units(ch))
+    return "".join(out)
+
+
+def properties_key(text: Any) -> str:
+    """A key of a Java properties file (JPF's ``.jpf``, AIL's ``.ail``) that
+    ``java.util.Properties.load`` reads back as ``text``: as ``Properties.store`` writes it
+    (every space, ``\\``, ``=``, ``:``, ``#``, ``!`` escaped, controls as ``\\t``
+    ``\\n`` ``\\r`` ``\\f``, other characters outside printable ASCII as ``\\uXXXX``),
+    so that no character of it ends the key, the line or the file's structure."""
+    return _properties(text, True)
+
+
+def properties_value(text: Any) -> str:
+    """A value of a Java properties file read back as ``text`` by
+    ``java.util.Properties.load``: :func:`properties_key`'s escapes but a space only where it
+    leads (``Properties.store``); a trailing ``\\`` is doubled, so it continues no line."""
+    return _properties(text, False)
+
+
+def properties_comment(text: Any) -> str:
+    """The text of one ``#`` comment line of a Java properties file: printable ASCII, no line
+    break (:func:`java_comment`'s escapes: ``Properties.load`` ends a comment at a line
+    terminator, and reads no escape in it)."""
+    return _ascii_escaped(text)
+
+
+def gwendolen_comment(text: Any) -> str:
+    """The text of one ``//`` comment line of a Gwendolen agent: :func:`one_line` (no line
+    break, no control or bidirectional character)."""
+    return one_line(text)
+
+
+def xml_content(text: Any) -> str:
+    """``text`` as the content of an XML 1.0 element (or an attribute in double quotes): one
+    line (:func:`xml_text` with no character kept), then ``&``, ``<``, ``>`` and ``"`` as
+    entities, so no text closes the element or adds one."""
+    return (xml_text(text, keep="").replace("&", "&amp;").replace("<", "&lt;")
+            .replace(">", "&gt;").replace('"', "&quot;"))

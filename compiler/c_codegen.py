@@ -253,11 +253,11 @@ def _strings(compiled, note: str) -> dict[str, str]:
 
 
 def _comment(text: str) -> str:
-    t = "".join(ch if 32 <= ord(ch) < 127 else "?" for ch in text)
-    t = t.replace("*/", "* /").replace("/*", "/ *")
-    while "??" in t:  # no trigraph
-        t = t.replace("??", "? ?")
-    return t
+    """A C comment's text: :func:`fretc.common.textsafe.c_comment`, the one C comment escape
+    (printable ASCII, no ``*/``, no trigraph)."""
+    from fretc.common.textsafe import c_comment
+
+    return c_comment(text)
 
 
 # --------------------------------------------------------------------------- files

@@ -252,7 +252,8 @@ def _releases(shield: Shield, compiled: Sequence[Any], atoms: Any, agent: str,
             held = released_for_good(shield, k, j, [p for _n, p, _w in props], valuations,
                                      atoms, push)
             out.append(f"# {label}: once every input atom stays false and the controller "
-                       f"keeps proposing push, {a.text} is eventually released for good "
+                       f"keeps proposing push, {_one_line(a.text)} is eventually released "
+                       "for good "
                        "(the shield's minimal interference)")
             if held is None:
                 out.append(f"#   not stated: over {MAX_RELEASE_STEPS} steps to check it here")

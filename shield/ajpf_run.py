@@ -37,6 +37,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from fretc.common.errors import FretcError
+from fretc.common.textsafe import properties_value
 
 __all__ = ["AjpfRunError", "Tools", "Verdict", "find_tools", "agent_in", "psl_labels",
            "compile_agent", "check_property", "check_agent"]
@@ -100,14 +101,14 @@ def find_tools(mcapl: str | None, java: str | None, javac: str | None,
         raise AjpfRunError(
             "MCAPL is not given: --mcapl DIR or AJPF_HOME naming the MCAPL folder (git clone "
             "https://github.com/mcapl/mcapl, then ant compile in it)")
-    root = Path(folder)
+    root = Path(os.path.abspath(folder))  # (JPF runs in the agent's folder: never relative)
     jar = root / "lib" / "3rdparty" / "RunJPF.jar"
     main = root / "bin" / "ail" / "util" / "AJPF_w_AIL.class"
     if not jar.is_file() or not main.is_file():
         missing = jar if not jar.is_file() else main
         raise AjpfRunError(f"{folder} is not a built MCAPL folder: {missing} is missing "
                            "(MCAPL's classes are built into bin/ by ant compile)")
-    runtime = java or env.get("AJPF_JAVA") or shutil.which("java")
+    runtime = _program(java or env.get("AJPF_JAVA") or shutil.which("java"))
     if not runtime:
         raise AjpfRunError("no Java runtime: --java PATH or AJPF_JAVA naming a Java 11 java")
     major = _version(runtime, "-version")
@@ -119,7 +120,7 @@ def find_tools(mcapl: str | None, java: str | None, javac: str | None,
             f"{runtime} is Java {major}: MCAPL's "
             "JPF (v8, jpf-core's Java 11 branch) runs on a Java 11 runtime; give one with "
             "--java PATH or AJPF_JAVA")
-    compiler = javac or shutil.which("javac")
+    compiler = _program(javac or shutil.which("javac"))
     if not compiler:
         raise AjpfRunError("no javac (JDK 11 or later): --javac PATH")
     cmajor = _version(compiler, "-version")
@@ -130,6 +131,18 @@ def find_tools(mcapl: str | None, java: str | None, javac: str | None,
         raise AjpfRunError(f"{compiler} is javac {cmajor}: the agent's environment is compiled "
                            "with --release 11, which needs JDK 11 or later (--javac PATH)")
     return Tools(root, runtime, compiler)
+
+
+def _program(tool: str | None) -> str | None:
+    """``tool`` as a command that runs from any folder: a path (it names a folder: ``bin/java``,
+    ``./java``) made absolute against the current folder (JPF runs in the agent's folder, so a
+    relative one would name another file there, or none: issue 91), a bare name as the ``PATH``
+    finds it (itself when it does not)."""
+    if not tool:
+        return tool
+    if os.sep in tool or (os.altsep is not None and os.altsep in tool):
+        return os.path.abspath(tool)
+    return shutil.which(tool) or tool
 
 
 def agent_in(folder: Path) -> str:
@@ -151,13 +164,29 @@ def agent_in(folder: Path) -> str:
     return base
 
 
+#: a property label fretc writes (:func:`fretc.compiler.ajpf.psl_label`) and passes to JPF
+_LABEL = re.compile(r"[A-Za-z0-9_]+")
+
+
 def psl_labels(psl: Path) -> list[str]:
     """The property labels of a ``.psl`` file, in order (AJPF's reader: a line not starting
-    with ``#``, ``label: formula``)."""
+    with ``#``, ``label: formula``).
+
+    Raises:
+        AjpfRunError: a label that is not letters, digits and ``_`` (as fretc writes them),
+            named with its line: it goes into JPF's ``.jpf`` file and a file name, where a
+            trailing ``\\`` continues the line and ``,`` splits the target's arguments."""
+    from fretc.common.textsafe import one_line
+
     out = []
-    for line in psl.read_text(encoding="utf-8").splitlines():
+    for n, line in enumerate(psl.read_text(encoding="utf-8").splitlines(), 1):
         if line.strip() and not line.startswith("#") and ":" in line:
-            out.append(line.split(":", 1)[0].strip())
+            label = line.split(":", 1)[0].strip()
+            if not _LABEL.fullmatch(label):
+                raise AjpfRunError(f"{psl}:{n}: the property label {one_line(repr(label))} is "
+                                   "not letters, digits and '_' (as fretc shield writes them): "
+                                   "rename it")
+            out.append(label)
     return out
 
 
@@ -188,12 +217,20 @@ def check_property(tools: Tools, folder: Path, base: str, label: str, classes: P
     ail = scoped if scoped.is_file() else folder / f"{base}.ail"
     with tempfile.TemporaryDirectory(prefix="fretc-ajpf-") as tmp:
         site, jpf = Path(tmp) / "site.properties", Path(tmp) / "check.jpf"
-        site.write_text(f"mcapl = {tools.mcapl.resolve()}\n", encoding="utf-8")
-        extra = ";".join([str(classes.resolve()), *_classpath(tools.mcapl)[1:]])
+        # (JPF's files are Java properties files: every path and the label escaped as
+        # Properties.store escapes them, textsafe; a path with JPF's list separators is
+        # refused before, by _jpf_path)
+        site.write_text(f"mcapl = {properties_value(_jpf_path(tools.mcapl.resolve()))}\n",
+                        encoding="utf-8")
+        extra = ";".join([_jpf_path(classes.resolve()),
+                          *map(_jpf_path, _classpath(tools.mcapl)[1:])])
+        args = ",".join([_jpf_path(ail.resolve()),
+                         _jpf_path((folder / f"{base}.psl").resolve()), label])
         jpf.write_text("\n".join([
             "@using = mcapl", "target = ail.util.AJPF_w_AIL",
-            f"target.args = {ail.resolve()},{(folder / f'{base}.psl').resolve()},{label}",
-            f"classpath+=;{extra}", f"native_classpath+=;{extra}", ""]), encoding="utf-8")
+            f"target.args = {properties_value(args)}",
+            f"classpath+=;{properties_value(extra)}",
+            f"native_classpath+=;{properties_value(extra)}", ""]), encoding="utf-8")
         start = time.monotonic()
         try:
             got = subprocess.run(
@@ -205,6 +242,21 @@ def check_property(tools: Tools, folder: Path, base: str, label: str, classes: P
                            f"timeout after {timeout:g} s")
         seconds = time.monotonic() - start
     return _verdict(label, got.stdout + got.stderr, seconds)
+
+
+def _jpf_path(path: Path | str) -> str:
+    """``path`` as text for JPF's ``.jpf`` lists.
+
+    Raises:
+        AjpfRunError: a path holding ``,`` or ``;`` (JPF splits its lists there) or ``${``
+            (JPF expands it), named: move the folder."""
+    from fretc.common.textsafe import one_line
+
+    text = str(path)
+    if "," in text or ";" in text or "${" in text:
+        raise AjpfRunError(f"{one_line(text)}: JPF cannot be given a path holding ',', ';' or "
+                           "'${' (its lists split there): move it to another folder")
+    return text
 
 
 def _verdict(label: str, log: str, seconds: float) -> Verdict:

@@ -16,7 +16,7 @@ from fretc.common.outputs import output_folder, write_under
 from fretc.shield.build import Shield
 from fretc.shield.plan import ShieldError
 
-__all__ = ["identifier", "render_forms", "write_forms"]
+__all__ = ["identifier", "render_forms", "write_forms", "check_names"]
 
 
 def identifier(name: str) -> str:
@@ -70,14 +70,63 @@ def write_forms(shield: Shield, forms: Sequence[str], out_dir: Path, *,
                 ) -> list[Path]:
     """Write each form of ``forms`` into ``out_dir`` (made when missing); the paths written,
     in order. Every form is made before any file is written: a form refused leaves the
-    folder as it was (no partial output).
+    folder as it was (no partial output), and so does a file name the file system cannot
+    hold (:func:`check_names`).
 
     Raises:
-        ShieldError: as :func:`render_forms`."""
+        ShieldError: as :func:`render_forms` and :func:`check_names`."""
     files = render_forms(shield, forms, bindings=bindings, bindings_file=bindings_file,
                          compiled=compiled, node=node)
+    check_names(out_dir, files)  # (all before the first file: none is written on a refusal)
     output_folder(out_dir)
     written: list[Path] = []
     for fname, content in files.items():  # (never through a link planted in out_dir)
         written.append(Path(write_under(out_dir, fname, content)))
     return written
+
+
+def _name_max(out_dir: Path) -> tuple[int, int]:
+    """``(longest file name, longest path)`` in bytes the file system of ``out_dir`` (its
+    nearest existing folder) holds: ``pathconf``'s ``PC_NAME_MAX`` and ``PC_PATH_MAX``,
+    else 255 and 4096 (POSIX's usual limits, Linux's and macOS's)."""
+    import os
+
+    folder = out_dir.absolute()
+    while not folder.exists() and folder.parent != folder:
+        folder = folder.parent
+    limits = []
+    for name, default in (("PC_NAME_MAX", 255), ("PC_PATH_MAX", 4096)):
+        try:
+            limits.append(int(os.pathconf(folder, name)))
+        except (AttributeError, OSError, ValueError):
+            limits.append(default)
+    return limits[0], limits[1]
+
+
+def check_names(out_dir: Path, files: dict[str, str | bytes]) -> None:
+    """Refuse, before anything is written, a file of ``files`` (relative paths) whose name,
+    or a folder's, is longer than ``out_dir``'s file system holds (the Gwendolen form's
+    ``N_LABEL.ail`` of a requirement id of hundreds of characters), or whose path is.
+
+    Raises:
+        ShieldError: naming the file (its first 60 characters), its length and the limit,
+            and what to shorten."""
+    import os
+
+    from fretc.common.textsafe import one_line
+
+    name_max, path_max = _name_max(out_dir)
+    for rel in files:
+        full = os.fsencode(str(out_dir.absolute() / rel))
+        for part in Path(rel).parts:
+            size = len(os.fsencode(part))
+            if size > name_max:
+                raise ShieldError(
+                    f"{one_line(str(out_dir / part)[:60])}...: a file name of {size} bytes, "
+                    f"more than the {name_max} the file system holds; nothing was written "
+                    "(shorten the requirement id or the shield's name it is made from)")
+        if len(full) >= path_max:
+            raise ShieldError(
+                f"{one_line(str(out_dir / rel)[:60])}...: a path of {len(full)} bytes, more "
+                f"than the {path_max} the file system holds; nothing was written (a shorter "
+                "-o folder, requirement id or shield name)")

@@ -135,11 +135,11 @@ def c_term(t: tuple[Any, ...], struct: str, names: dict[str, str] | None = None)
 
 
 def _comment(text: str) -> str:
-    t = "".join(ch if 32 <= ord(ch) < 127 else "?" for ch in text)
-    t = t.replace("*/", "* /").replace("/*", "/ *")
-    while "??" in t:
-        t = t.replace("??", "? ?")
-    return t
+    """A C comment's text: :func:`fretc.common.textsafe.c_comment`, the one C comment escape
+    (printable ASCII, no ``*/``, no trigraph)."""
+    from fretc.common.textsafe import c_comment
+
+    return c_comment(text)
 
 
 @dataclass

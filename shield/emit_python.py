@@ -13,6 +13,7 @@ import inspect
 import math
 from typing import Any
 
+from fretc.common.textsafe import python_doc
 from fretc.shield import runtime
 from fretc.shield.build import Shield
 
@@ -130,8 +131,10 @@ Monitored only (not enforced):
 {assumed}
 Digest of requirements, choices and tables: {shield.digest}
 '''
-    # (the texts are the user's: a backslash or three quotes must not end or break it)
-    head = '"""' + doc.replace("\\", "\\\\").replace('"""', '\\"\\"\\"') + '"""\n\n'
+    # (the texts are the user's: a backslash or three quotes must not end or break it, nor
+    # a NUL, a carriage return or a lone surrogate make the module unreadable:
+    # textsafe.python_doc, which reads back as the text)
+    head = '"""' + python_doc(doc) + '"""\n\n'
     body = _runtime_body()
     tail = f'''
 
