@@ -32,6 +32,7 @@ from fretc.signals.bindings.binding import compile_expression
 from fretc.signals.bindings.compile import EvalState
 from fretc.signals.bindings.expression import Field
 from fretc.signals.bindings.extract import Valid, make_extractor
+from fretc.signals.bindings.frames import FRAME_FIELDS, frame_name
 from fretc.audit.passes import restrict as restrict_bindings
 from fretc.signals.clock import Clock, Sampling, Tick, present_tf
 from fretc.signals.streams import Streams
@@ -69,6 +70,10 @@ class _Kind:
         ast = self.key.ast
         self.exact = (make_extractor(ast, self.key.constants, exact=True)
                       if isinstance(ast, Field) and not ast.filters else None)
+        # (TF frames: without their leading slash, as tf2 and the audit name them)
+        last = self.key.fields[0].path[-1] if self.key.fields and self.key.fields[0].path \
+            else None
+        self.frames = isinstance(last, str) and last in FRAME_FIELDS
         self.seen: set = set()
         self.instances: list[_Instance] = []
 
@@ -88,6 +93,8 @@ class _Kind:
         for x in items:
             if isinstance(x, float) and x.is_integer():
                 x = int(x)
+            if self.frames and isinstance(x, str):
+                x = frame_name(x)
             if self.matching is None or fnmatchcase(str(x), self.matching):
                 out.append(x)
         return out

@@ -20,6 +20,7 @@ from fretc.signals.bindings import Bindings
 from fretc.signals.bindings.binding import Binding, compile_kept
 from fretc.signals.bindings.expression import EntityParam, Field
 from fretc.signals.bindings.extract import Valid, make_extractor
+from fretc.signals.bindings.frames import FRAME_FIELDS
 
 __all__ = ["EntityKind", "EntityTable", "entity_kind", "key_items", "own_bindings",
            "check_stream", "clock_topics"]
@@ -45,6 +46,11 @@ class EntityKind:
     stream: bool
     hold: str = "message"
     exact: Callable[[Any], Any] | None = None
+    #: the keys are TF frame names (the key's field is one of
+    #: :data:`~fretc.signals.bindings.frames.FRAME_FIELDS`): read as
+    #: :func:`~fretc.signals.bindings.frames.frame_name` gives them (tf2's rule: ``/car``
+    #: and ``car`` one frame, one entity named ``car``)
+    frames: bool = False
 
     @property
     def held(self) -> bool:
@@ -65,8 +71,9 @@ def entity_kind(bindings: Bindings, name: str) -> EntityKind:
     topic = next(iter(b.topics))
     exact = (make_extractor(b.ast, b.constants, exact=True) if isinstance(b.ast, Field)
              and not b.ast.filters else None)
+    last = b.fields[0].path[-1] if b.fields[0].path else None
     return EntityKind(name, key, matching, b, topic, not any(f.multi for f in b.fields), hold,
-                      exact)
+                      exact, isinstance(last, str) and last in FRAME_FIELDS)
 
 
 def key_items(v: Any) -> list:

@@ -63,7 +63,7 @@ from fretc.signals.bindings.compile import EvalState
 from fretc.signals.bindings.expression import EntityParam, Filter
 from fretc.signals.bindings.extract import by_entity
 from fretc.signals.bindings.spec import grid_end, grid_start
-from fretc.signals.bindings.frames import TfBuffer
+from fretc.signals.bindings.frames import TfBuffer, frame_name
 from fretc.signals.clock import (Clock, HeaderBuffer, Sampling, Tick, check_topics, present_tf,
                                  silence_end)
 from fretc.signals.columns import Irregular
@@ -134,7 +134,8 @@ class EntityClock(Clock):
         self.msg_rows: dict[int, HeldRows] = {}
         self.batch: list[tuple[Any, list[int], HeldRows, list | None]] = []
         self.evaluated = [0, 0]  # rows evaluated vectorized, by the reference
-        self.read_keys = key_reader(kind.binding) if vectorized else None
+        # (frame names: read by _keys, which strips their slash as tf2 does)
+        self.read_keys = key_reader(kind.binding) if vectorized and not kind.frames else None
         #: the rows of a held message are its items (:func:`~fretc.audit.entities.rows.
         #: reads_items_of`), and the items of the held message when its entities were
         #: read from them in order (:func:`fretc.audit.entities.runs.lean_messages`)
@@ -293,10 +294,10 @@ class EntityClock(Clock):
         kind, st = self.kind, self.key_state
         try:
             if kind.exact is not None:  # (a field path: its keys exact, no float64 between)
-                return key_items(kind.exact(data))
+                return _frames(kind, key_items(kind.exact(data)))
             st.msgs[kind.topic], st.times[kind.topic], st.now = data, t, t
             st.values.clear()
-            values = key_items(kind.binding._scalar(st))  # type: ignore[misc]
+            values = _frames(kind, key_items(kind.binding._scalar(st)))  # type: ignore[misc]
         except Exception as exc:  # noqa: BLE001 - an extractor's error, named with the message
             raise SignalError(f"[entities] {kind.name}: {kind.key} cannot be read from the "
                               f"message of {kind.topic} at log time {t}: {exc}") from None
@@ -479,6 +480,14 @@ class EntityClock(Clock):
                 out.append(float("nan"))
         st.values.clear()
         return tuple(out)
+
+
+def _frames(kind: EntityKind, keys: list) -> list:
+    """``keys`` as entity keys of ``kind``: TF frame names without their leading ``/``
+    (:attr:`EntityKind.frames`, :func:`fretc.signals.bindings.frames.frame_name`)."""
+    if not kind.frames:
+        return keys
+    return [frame_name(x) if isinstance(x, str) else x for x in keys]
 
 
 def read_entities(source: Any, bindings: Bindings,

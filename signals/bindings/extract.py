@@ -22,6 +22,7 @@ from typing import Any
 import numpy as np
 
 from fretc.signals.bindings.expression import Const, EntityParam, Field, Filter, Slice, const_value
+from fretc.signals.bindings.frames import FRAME_FIELDS, frame_name
 
 __all__ = ["LASER_SCAN", "rep117", "Valid", "FieldAccessError", "make_extractor", "message_filter", "by_entity",
            "normalize_scalar", "entity_key"]
@@ -72,6 +73,14 @@ def entity_key(v: Any) -> Any:
     if isinstance(v, np.generic):
         return v.item()
     return v
+
+
+def _frame_key(v: Any) -> Any:
+    """An item's key compared with an entity that is a TF frame (the filter's field one of
+    :data:`~fretc.signals.bindings.frames.FRAME_FIELDS`): a string without its leading
+    ``/`` (:func:`~fretc.signals.bindings.frames.frame_name`, tf2's rule)."""
+    v = entity_key(v)
+    return frame_name(v) if isinstance(v, str) else v
 
 
 def _as_array(v: np.ndarray) -> np.ndarray:
@@ -173,9 +182,11 @@ def _filter_test(flt: Filter, constants: dict[str, Any], text: str) -> Callable[
     get = operator.attrgetter(".".join(flt.path))
     op = _FILTER_OPS[flt.op]
     value_node = flt.value
-    # (compared with an entity's key: the item's key read exactly, :func:`entity_key`)
-    read = (entity_key if isinstance(value_node, Const)
-            and isinstance(value_node.value, EntityParam) else normalize_scalar)
+    # (compared with an entity's key: the item's key read exactly, :func:`entity_key`; a
+    # frame name without its leading slash, :func:`_frame_key`)
+    read = ((_frame_key if flt.path and flt.path[-1] in FRAME_FIELDS else entity_key)
+            if isinstance(value_node, Const) and isinstance(value_node.value, EntityParam)
+            else normalize_scalar)
 
     def keep(item: Any) -> bool:
         want: Any
@@ -245,13 +256,14 @@ def _grouper(flt: Filter, text: str) -> Callable[[Any, int, list, bool], list]:
     get = operator.attrgetter(".".join(flt.path))
     param = flt.value.value  # type: ignore[attr-defined]
     memo: list[Any] = [None, -1, None]  # message, step, groups
+    read = _frame_key if flt.path and flt.path[-1] in FRAME_FIELDS else entity_key
 
     def step(data: Any, k: int, items: list, many: bool) -> list:
         if memo[0] is not data or memo[1] != k:
             flat, _m = _select(items, many, "filter", lambda x: True, text)
             groups: dict[tuple[bool, Any], list] = {}
             for x in flat:
-                v = entity_key(get(x))
+                v = read(get(x))
                 groups.setdefault((isinstance(v, str), v), []).append(x)
             memo[0], memo[1], memo[2] = data, k, groups
         want = param.value

@@ -20,7 +20,24 @@ from typing import Any
 from fretc.common.textsafe import visible
 from fretc.common.units import NS_PER_S
 
-__all__ = ["LookupFailed", "TfBuffer", "pick_joint", "compose", "invert", "yaw_of"]
+__all__ = ["LookupFailed", "TfBuffer", "pick_joint", "compose", "invert", "yaw_of",
+           "frame_name", "FRAME_FIELDS"]
+
+#: The fields whose strings are TF frame names (std_msgs/Header's ``frame_id``,
+#: geometry_msgs/TransformStamped's ``child_frame_id``): an entity keyed by one is a frame
+#: and its key is read as :func:`frame_name` gives it.
+FRAME_FIELDS = frozenset({"frame_id", "child_frame_id"})
+
+
+def frame_name(name: str) -> str:
+    """A TF frame name as fretc compares frames: without its leading ``/``. tf2 stores the
+    frames of every transform it is given without a leading slash (ROS 2 geometry2,
+    ``BufferCore::setTransformImpl``: ``stripSlash(frame_id)``, ``stripSlash(child_frame_id)``;
+    a lookup naming a frame with one is an invalid argument), so ``/car`` and ``car`` are one
+    frame. fretc strips every leading ``/`` (``//car`` too, where tf2 strips one: no frame
+    of a recorded tree starts with two), in :class:`TfBuffer` and in the keys of entities
+    that are frames (:data:`FRAME_FIELDS`), so that one frame is one entity, named once."""
+    return name.lstrip("/")
 
 #: A transform: (translation (x, y, z) in m, rotation as a unit quaternion (x, y, z, w)).
 Transform = tuple[tuple[float, float, float], tuple[float, float, float, float]]
@@ -75,8 +92,8 @@ class TfBuffer:
         (ns, the bindings' time base)."""
         static = topic == "/tf_static"
         for tr in getattr(data, "transforms", ()):
-            parent = str(tr.header.frame_id).lstrip("/")
-            child = str(tr.child_frame_id).lstrip("/")
+            parent = frame_name(str(tr.header.frame_id))
+            child = frame_name(str(tr.child_frame_id))
             tl, r = tr.transform.translation, tr.transform.rotation
             norm = math.sqrt(r.x * r.x + r.y * r.y + r.z * r.z + r.w * r.w) or 1.0
             self.edges[child] = (parent, ((float(tl.x), float(tl.y), float(tl.z)),
@@ -111,7 +128,7 @@ class TfBuffer:
         Raises:
             LookupFailed: the frames do not connect in the transforms held.
         """
-        parent, child = parent.lstrip("/"), child.lstrip("/")
+        parent, child = frame_name(parent), frame_name(child)
         up_p, up_c = self._chain(parent), self._chain(child)
         common = next((f for f in up_c if f in up_p), None)
         if common is None:
