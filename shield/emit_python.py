@@ -49,6 +49,7 @@ def tables(shield: Shield) -> dict[str, Any]:
             "init": [int(b) for b in m.init],
             "nodes": [tuple(n) for n in m.nodes],
             "safe": m.safe, "next": list(m.next), "keep": list(m.keep), "ctl_ok": m.ctl_ok,
+            "env_ok": m.env_ok,
             "weights": {j: (int(w), x) for j, (w, x) in sorted(shield.weights(k).items())},
             "groups": groups,
             "clusters": [{"atoms": list(c["atoms"]), "variables": list(c["variables"]),

@@ -24,8 +24,8 @@ reader, :func:`fretc.logs.open_log`, and the same bindings), :func:`replay_log`:
 * counts, per enforced requirement, the ticks at which its machine overrode the proposal
   (the requirements :attr:`fretc.shield.runtime.Decision.reasons` names) with the first
   and last log time; the overrides for a proposal that is no message the bindings give;
-  the ticks whose inputs could not be read (the shield's fallback published,
-  :meth:`fretc.shield.runtime.ShieldRuntime.fault`: before the first scan, a NaN), a
+  the ticks with an input that could not be read (before the first scan, a NaN: the
+  shield decided for every value it could have had, :mod:`fretc.shield.runtime`), a
   proposal that could not be read (replaced), ticks with nothing published (no fallback),
   and the assumptions of the environment that broke.
 

@@ -32,10 +32,21 @@ moves (:func:`read_value`): a missing variable, a value of the wrong type (a boo
 or a string), a NaN, an integer no double holds (``10**400``) and, for a proposal, an
 infinite number (no actuator takes one) cannot be read. Then:
 
-* an **input** that cannot be read leaves every machine's state as it was and the step
-  returns the fallback's outputs (none when the shield has no fallback), with
-  ``Decision.fault`` saying which input and why (an infinite input is read: REP 117's
-  ``+inf`` is "no return", which a comparison reads);
+* an **input** that cannot be read is **any value**: the atoms that read it take every truth
+  value real numbers give them (the machine's ``env_ok``), and the step decides for all of
+  them at once. Each machine keeps the set of states it may be in (its *belief*, one state
+  while every input is read): the outputs are the proposal when it is safe from every state
+  of the belief with every value the unreadable input could have had, else the safe outputs
+  nearest it among each case's own correction and the fallback's, and the next belief is
+  every state those outputs lead to. So a trigger the shield can read is never lost (a NaN
+  in another requirement's input at the tick ``a`` rises still starts ``a``'s deadline), and
+  the enforced requirements hold whatever the unread value was. ``Decision.fault`` says
+  which input and why (an infinite input is read: REP 117's ``+inf`` is "no return", which
+  a comparison reads). The belief is bounded (:data:`BELIEF_LIMIT` states,
+  :data:`CASES_LIMIT` cases a tick); past a bound, or when no outputs are safe in every case
+  (a shield without a fallback), the machine no longer knows its state: it gives the
+  fallback's outputs (none without one) at every tick until :meth:`ShieldRuntime.reset`,
+  and ``Decision.fault`` says so;
 * a **proposed output** that cannot be read is replaced, never passed on: by the
   fallback's value of that variable, then decided as any proposal (the state moves);
   without a fallback its atoms are left to the correction (any value of theirs costs
@@ -56,13 +67,20 @@ import numbers
 from collections.abc import Callable
 from typing import Any, NamedTuple
 
-__all__ = ["Decision", "ShieldRuntime", "CACHE_LIMIT", "truth", "nearest", "term_value",
-           "Unreadable", "read_value"]
+__all__ = ["Decision", "ShieldRuntime", "CACHE_LIMIT", "BELIEF_LIMIT", "CASES_LIMIT", "truth",
+           "nearest", "term_value", "Unreadable", "read_value"]
 
 #: moves (and corrections) remembered per machine, keyed by (state, input atoms, output
 #: atoms): the BDD walks of a tick are done once per distinct key; past the limit the memory
 #: is cleared (the answers never depend on it)
 CACHE_LIMIT = 1 << 16
+
+#: the most states a machine's belief holds (module docstring): past it the machine's state
+#: is unknown and it gives the fallback until reset
+BELIEF_LIMIT = 256
+#: the most cases (a state of the belief with a valuation of the unreadable inputs' atoms) a
+#: machine decides one tick for; past it, as past :data:`BELIEF_LIMIT`
+CASES_LIMIT = 4096
 
 _OPS: dict[str, Callable[[float, float], bool]] = {
     "<": lambda x, c: x < c, "<=": lambda x, c: x <= c, ">": lambda x, c: x > c,
@@ -90,6 +108,9 @@ class Decision(NamedTuple):
     #: the assumptions of the environment broken so far (module docstring): the shield's
     #: guarantee no longer holds, ``outputs`` are the fallback's
     broken: tuple[str, ...] = ()
+    #: the requirements of the machines that no longer know their state (module
+    #: docstring): their outputs are the fallback's (none without one) until reset
+    lost: tuple[str, ...] = ()
 
 
 def truth(spec: tuple[str, str | None, float | None], value: Any) -> bool:
@@ -126,12 +147,16 @@ def read_value(var: str, kind: str, values: dict[str, Any], proposal: bool = Fal
     a number; module docstring): a bool, or a float.
 
     Raises:
-        Unreadable: missing, of the wrong type, NaN, too large for a double, or (a
-            ``proposal``) infinite."""
+        Unreadable: missing, of the wrong type, NaN, too large for a double, (a
+            ``proposal``) infinite, or an exception (a host's reading that failed, e.g. an
+            :class:`Unreadable`: its message is the reason)."""
     try:
         value = values[var]
     except KeyError:
         raise Unreadable(f"{var} is missing") from None
+    if isinstance(value, Exception):  # (a host's reading that failed, with its reason; an
+        # Unreadable of another copy of this module, e.g. a generated shield's, is one too)
+        raise Unreadable(str(value))
     t = type(value)
     if t is float and kind == "n":  # (the common cases first: a step reads many values)
         if value != value:
@@ -361,6 +386,16 @@ class _Machine:
         self.atoms_of = {v: [j for j, s in enumerate(self.outs) if s[0] == v]
                          for v in self.variables if v not in clustered}
         self.in_kinds, self.out_kinds = kinds(self.ins), kinds(self.outs)
+        self.env_ok = t.get("env_ok", 1)
+        #: the other states the machine may be in after a tick with an unreadable input
+        #: (module docstring: its belief is ``state`` and these, sorted); ``lost``: past the
+        #: bounds, its state is unknown until reset
+        self.others: tuple[tuple[int, ...], ...] = ()
+        self.lost = False
+        #: the input atoms that read each input variable
+        self.reading_in = {v: [j for j, s in enumerate(self.ins)
+                               if (v in term_variables(s[2]) if s[1] == "pred" else s[0] == v)]
+                           for v in self.in_kinds}
         self.assume_ids = tuple(t.get("assumptions", ()))
         self.assumed = tuple(t.get("assumed", ()))
         #: the output atoms that read each output variable
@@ -368,13 +403,16 @@ class _Machine:
                             if (v in term_variables(s[2]) if s[1] == "pred" else s[0] == v)]
                         for v in self.out_kinds}
 
-    def move(self, ins: tuple[int, ...], outs: tuple[int, ...]) -> tuple[bool, tuple[int, ...]]:
-        """Whether ``outs`` is safe from the current state with ``ins``, and the next
-        state when it is (remembered)."""
-        key = (self.state, ins, outs)
+    def move(self, ins: tuple[int, ...], outs: tuple[int, ...],
+             state: tuple[int, ...] | None = None) -> tuple[bool, tuple[int, ...]]:
+        """Whether ``outs`` is safe from ``state`` (default the current state) with ``ins``,
+        and the next state when it is (remembered)."""
+        if state is None:
+            state = self.state
+        key = (state, ins, outs)
         got = self.cache.get(key)
         if got is None:
-            values = list(ins + outs + self.state)
+            values = list(ins + outs + state)
             safe = _walk(self.nodes, self.safe, values) == 1
             nxt = tuple(_walk(self.nodes, r, values) for r in self.next) if safe else ()
             if len(self.cache) >= CACHE_LIMIT:
@@ -383,13 +421,18 @@ class _Machine:
         return got
 
     def correct(self, ins: tuple[int, ...], prop: tuple[int, ...],
-                unknown: frozenset[int] = frozenset()) -> tuple[int, ...]:
-        """The safe output atoms nearest ``prop``: the fewest changes, then the preferences
-        in order (a shortest path through the ``safe`` BDD; untested atoms keep their
-        proposed values; equal costs take the low branch). The atoms ``unknown`` (a
-        proposal that could not be read) cost nothing either way but their preferences."""
+                unknown: frozenset[int] = frozenset(),
+                state: tuple[int, ...] | None = None) -> tuple[int, ...]:
+        """The safe output atoms nearest ``prop`` from ``state`` (default the current
+        state): the fewest changes, then the preferences in order (a shortest path through
+        the ``safe`` BDD; untested atoms keep their proposed values; equal costs take the
+        low branch). The atoms ``unknown`` (a proposal that could not be read) cost nothing
+        either way but their preferences.
+
+        Raises:
+            RuntimeError: no safe output (the state is outside the winning region)."""
         n_in, n_out = len(ins), len(prop)
-        values = list(ins + prop + self.state)
+        values = list(ins + prop + (self.state if state is None else state))
         costs: list[float] = [math.inf, 0.0]
         for var, lo, hi in self.nodes[2:self.safe + 1]:  # safe's nodes come first
             j = var - n_in
@@ -465,12 +508,126 @@ class _Machine:
         return (self._values(plan, proposed), reasons, changed, self.move(ins, outs)[1],
                 self._broken(ins, outs))
 
-    def _broken(self, ins: tuple[int, ...], outs: tuple[int, ...]) -> tuple[str, ...]:
+    @property
+    def belief(self) -> tuple[tuple[int, ...], ...]:
+        """The states the machine may be in (module docstring), the current one first."""
+        return (self.state, *self.others)
+
+    def input_cases(self, inputs: dict[str, Any], unread: frozenset[str]
+                    ) -> list[tuple[int, ...]]:
+        """The valuations of the input atoms this tick may have: each atom that reads no
+        variable of ``unread`` its value on ``inputs`` (checked values), each that does
+        either value, the valuations real numbers give (``env_ok``) kept, in binary order.
+        Past :data:`CASES_LIMIT` valuations, the first ``CASES_LIMIT + 1`` (the caller's
+        bound is then passed)."""
+        free = sorted({j for v in unread for j in self.reading_in.get(v, ())})
+        fixed = [0 if j in free else int(f(inputs)) for j, f in enumerate(self.in_tests)]
+        if not free:
+            return [tuple(fixed)]
+        pad = [0] * (len(self.outs) + len(self.state))
+        out: list[tuple[int, ...]] = []
+        for k in range(1 << min(len(free), 30)):
+            for b, j in enumerate(free):
+                fixed[j] = (k >> b) & 1
+            if _walk(self.nodes, self.env_ok, fixed + pad) == 1:
+                out.append(tuple(fixed))
+                if len(out) > CASES_LIMIT:
+                    break
+        return out
+
+    def decide_cases(self, inputs: dict[str, Any], unread: frozenset[str],
+                     proposed: dict[str, Any], unknown: frozenset[str],
+                     fallback: tuple[list[int], dict[str, Any]] | None
+                     ) -> tuple[dict[str, Any], tuple[str, ...], tuple[str, ...],
+                                tuple[tuple[int, ...], ...] | None, tuple[str, ...], str]:
+        """:meth:`decide` for a belief of several states or inputs ``unread`` (variables
+        whose values could not be read; ``inputs`` holds the others'): the decision safe in
+        every case (module docstring), nothing moved. ``fallback``: this machine's fallback
+        atoms and the fallback's outputs (None: no fallback).
+
+        Returns ``(outputs, reasons, changed, next belief, broken, why)``: the next belief
+        sorted, None when the machine no longer knows its state (``why`` then says why and
+        the outputs are the fallback's, none without one); ``broken`` the assumptions broken
+        in every case."""
+        if self.lost:
+            return self._lost(fallback, proposed, "its state is unknown since an earlier "
+                              "tick (reset the shield)")
+        cases = [(st, i) for i in self.input_cases(inputs, unread) for st in self.belief]
+        if len(cases) > CASES_LIMIT:
+            return self._lost(fallback, proposed, f"more than {CASES_LIMIT} cases to decide")
+        unk = frozenset(j for v in unknown for j in self.reading.get(v, ()))
+        prop = tuple([0 if j in unk else f(proposed) for j, f in enumerate(self.out_tests)])
+
+        def safe_in_all(outs: tuple[int, ...]) -> bool:
+            return all(self.move(i, outs, st)[0] for st, i in cases)
+
+        if not unk and safe_in_all(prop):
+            outs, reasons, changed = prop, (), ()
+            values = self._whole(proposed, prop) if self.integers else {}
+        else:
+            candidates: list[tuple[int, ...]] = []
+            for st, i in cases:
+                c = self.correct(i, prop, unk, st)
+                if c not in candidates:
+                    candidates.append(c)
+            if fallback is not None and tuple(fallback[0]) not in candidates:
+                candidates.append(tuple(fallback[0]))
+            good = [c for c in candidates if safe_in_all(c)]
+            if not good:
+                return self._lost(fallback, proposed, "no outputs are safe for every value "
+                                  "the unreadable input could have had")
+            outs = min(good, key=lambda c: (sum(self._cost(j, c[j], prop, unk)
+                                                for j in range(len(c))), good.index(c)))
+            changed = tuple(t for j, (t, p, o) in enumerate(zip(self.texts, prop, outs))
+                            if p != o or j in unk)
+            reasons = ()
+            if changed and not unk:
+                reasons = tuple(r for r, k in zip(self.reqs, self.keep)
+                                if any(_walk(self.nodes, k, list(i + prop + st)) != 1
+                                       for st, i in cases))
+                if not reasons and all(_walk(self.nodes, self.ctl_ok, list(i + prop + st)) == 1
+                                       for st, i in cases):
+                    reasons = self.reqs  # (no requirement alone: the machine's together)
+            values = self._values(self._plan(outs, changed), proposed)
+        nexts = sorted({self.move(i, outs, st)[1] for st, i in cases})
+        if len(nexts) > BELIEF_LIMIT:
+            return self._lost(fallback, proposed, f"more than {BELIEF_LIMIT} states it may "
+                              "be in")
+        broken: tuple[str, ...] = ()
+        if self.assumed:
+            per_case = [set(self._broken(i, outs, st)) for st, i in cases]
+            broken = tuple(a for a in self.assume_ids if all(a in b for b in per_case))
+        return values, reasons, changed, tuple(nexts), broken, ""
+
+    def _lost(self, fallback: tuple[list[int], dict[str, Any]] | None,
+              proposed: dict[str, Any], why: str
+              ) -> tuple[dict[str, Any], tuple[str, ...], tuple[str, ...], None, tuple[str, ...],
+                         str]:
+        """The decision of a machine that no longer knows its state (module docstring): the
+        fallback's values of its outputs (none without a fallback), every output atom whose
+        fallback truth is not the proposal's changed."""
+        if fallback is None:
+            return {}, (), tuple(self.texts), None, (), why + "; no fallback: no outputs"
+        bits, values = fallback
+        mine = {v: values[v] for v in self.out_kinds if v in values}
+        changed = []
+        for j, (spec, f, t) in enumerate(zip(self.outs, self.out_tests, self.texts)):
+            need = term_variables(spec[2]) if spec[1] == "pred" else {spec[0]}
+            try:
+                ok = need <= proposed.keys() and int(f(proposed)) == bits[j]
+            except (TypeError, ValueError):
+                ok = False
+            if not ok:
+                changed.append(t)
+        return mine, (), tuple(changed), None, (), why
+
+    def _broken(self, ins: tuple[int, ...], outs: tuple[int, ...],
+                state: tuple[int, ...] | None = None) -> tuple[str, ...]:
         """The assumptions that have not held at every tick up to this one, with these
         atoms (module docstring)."""
         if not self.assumed:
             return ()
-        values = list(ins + outs + self.state)
+        values = list(ins + outs + (self.state if state is None else state))
         return tuple(a for a, r in zip(self.assume_ids, self.assumed)
                      if _walk(self.nodes, r, values) != 1)
 
@@ -579,34 +736,49 @@ class ShieldRuntime:
     def reset(self) -> None:
         """Back to the initial state (before the first tick)."""
         for m in self.machines:
-            m.state = m.init
+            m.state, m.others, m.lost = m.init, (), False
 
     @property
-    def state(self) -> tuple[tuple[int, ...], ...]:
-        """Each machine's state bits."""
-        return tuple(m.state for m in self.machines)
+    def state(self) -> tuple[Any, ...]:
+        """Each machine's state: its state bits (a tuple of 0/1) while it knows its state,
+        else ``("belief", state bits, ...)`` (the states it may be in after a tick with an
+        unreadable input, module docstring) or ``("lost",)`` (its state unknown)."""
+        return tuple(("lost",) if m.lost else ("belief", *m.belief) if m.others else m.state
+                     for m in self.machines)
 
-    def restore(self, state: tuple[tuple[int, ...], ...]) -> None:
+    def restore(self, state: tuple[Any, ...]) -> None:
         """Put back a :attr:`state` read before a step (a host whose tick failed after
         the step, before it published: the tick is then not taken)."""
         for m, bits in zip(self.machines, state, strict=True):
-            m.state = tuple(bits)
+            bits = tuple(bits)
+            if bits and bits[0] == "lost":
+                m.state, m.others, m.lost = m.init, (), True
+            elif bits and bits[0] == "belief":
+                m.state, m.others, m.lost = tuple(bits[1]), tuple(bits[2:]), False
+            else:
+                m.state, m.others, m.lost = bits, (), False
 
-    def accepts(self, state: tuple[tuple[int, ...], ...], inputs: dict[str, Any],
+    def accepts(self, state: tuple[Any, ...], inputs: dict[str, Any],
                 outputs: dict[str, Any]) -> bool:
         """Whether ``outputs`` (every output variable's value) keep every requirement
-        winnable from ``state`` (as :attr:`state` gave it) with ``inputs``; nothing
-        advances. A host publishing a tick's outputs as several messages uses it to order
-        them so that a sampler between two of them sees an accepted valuation.
+        winnable from ``state`` (as :attr:`state` gave it: every state of a belief) with
+        ``inputs`` (an input that cannot be read: with every value it could have had);
+        nothing advances. A host publishing a tick's outputs as several messages uses it to
+        order them so that a sampler between two of them sees an accepted valuation.
 
         Raises:
             Unreadable (a ValueError): a value the step could not read."""
-        ins = {v: read_value(v, k, inputs) for v, k in self.input_kinds.items()}
+        ins, unread = self._readable(inputs)
         outs = {v: read_value(v, k, outputs, True) for v, k in self.output_kinds.items()}
-        for m, bits in zip(self.machines, state):
-            values = [f(ins) for f in m.in_tests] + [f(outs) for f in m.out_tests]
-            if _walk(m.nodes, m.safe, values + list(bits)) != 1:
-                return False
+        for m, held in zip(self.machines, state):
+            out_bits = [f(outs) for f in m.out_tests]
+            bits: tuple[Any, ...] = tuple(held)
+            if bits and bits[0] == "lost":
+                continue  # (the fallback's outputs: any order)
+            for st in (bits[1:] if bits and bits[0] == "belief" else (bits,)):
+                for i in m.input_cases(ins, frozenset(unread)):
+                    if _walk(m.nodes, m.safe, list(i) + out_bits + list(st)) != 1:
+                        return False
         return True
 
     def step(self, inputs: dict[str, Any], proposed: dict[str, Any]) -> Decision:
@@ -619,10 +791,11 @@ class ShieldRuntime:
         requirement reads are passed through. All or nothing (module docstring): a value
         that cannot be read never raises; an input leaves the state as it was and gives the
         fallback (``Decision.fault`` says why), a proposal is replaced."""
+        unread: dict[str, str] = {}
         try:
             ins = _checked(self.input_kinds, inputs, False)
-        except Unreadable as exc:
-            return self.fault(f"input {exc}", proposed)
+        except Unreadable:
+            ins, unread = self._readable(inputs)
         try:  # (the common case: every proposal readable)
             props = _checked(self.output_kinds, proposed, True)
             faults: list[str] = []
@@ -630,6 +803,9 @@ class ShieldRuntime:
             frozen: frozenset[str] = frozenset()
         except Unreadable:
             props, faults, replaced, frozen = self._replaced(proposed)
+        if unread or any(m.others or m.lost for m in self.machines):
+            return self._step_cases(ins, frozenset(unread), props, faults, replaced, frozen,
+                                    proposed, [f"input {why}" for why in unread.values()])
         # every machine decides before any moves: a step is all or nothing
         moves = [m.decide(ins, props, frozen) for m in self.machines]
         outputs = {v: proposed[v] for v in self.passed if v in proposed}
@@ -658,6 +834,63 @@ class ShieldRuntime:
         return Decision(outputs, bool(changed) or bool(faults), tuple(reasons),
                         tuple(changed), "; ".join(faults))
 
+    def _readable(self, inputs: dict[str, Any]) -> tuple[dict[str, Any], dict[str, str]]:
+        """The input values that can be read (:func:`read_value`), and each other input
+        variable -> why not (module docstring: it is any value)."""
+        ins: dict[str, Any] = {}
+        unread: dict[str, str] = {}
+        for v, k in self.input_kinds.items():
+            try:
+                ins[v] = read_value(v, k, inputs)
+            except Unreadable as exc:
+                unread[v] = str(exc)
+        return ins, unread
+
+    def _step_cases(self, ins: dict[str, Any], unread: frozenset[str], props: dict[str, Any],
+                    faults: list[str], replaced: list[str], frozen: frozenset[str],
+                    proposed: dict[str, Any], input_faults: list[str]) -> Decision:
+        """:meth:`step` when an input cannot be read or a machine's belief holds several
+        states (module docstring): each machine decides for every case
+        (:meth:`_Machine.decide_cases`), all before any moves."""
+        fb = self.fallback
+        moves = [m.decide_cases(ins, unread, props, frozen,
+                                (fb["atoms"][k], fb["outputs"]) if fb is not None else None)
+                 for k, m in enumerate(self.machines)]
+        outputs = {v: proposed[v] for v in self.passed if v in proposed}
+        outputs.update(props)
+        reasons: list[str] = []
+        changed: list[str] = []
+        broken: list[str] = []
+        notes = list(input_faults)
+        silent = False
+        unknown_state: list[str] = []
+        for m, (values, why, what, nxt, gone, lost_why) in zip(self.machines, moves):
+            if nxt is None:
+                m.lost = True
+                unknown_state += m.reqs
+                notes.append(f"the machine of {', '.join(m.reqs)}: {lost_why}")
+                if not values:
+                    silent = True
+            else:
+                m.state, m.others = nxt[0], nxt[1:]
+            outputs.update(values)
+            reasons += why
+            changed += what
+            broken += gone
+            if replaced:
+                changed += [m.texts[j] for v in replaced for j in m.reading.get(v, ())
+                            if m.texts[j] not in what]
+        fault = "; ".join(notes + faults)
+        lost = tuple(unknown_state)
+        if broken:
+            outs, moved = self._fallback_outputs(proposed)
+            return Decision(outs, True, tuple(reasons), moved, fault, tuple(broken), lost)
+        if silent:
+            return Decision({}, True, tuple(reasons), tuple(changed), fault, (), lost)
+        outputs = {v: outputs[v] for v in self.outputs if v in outputs}
+        return Decision(outputs, bool(changed) or bool(faults), tuple(reasons),
+                        tuple(changed), fault, (), lost)
+
     def _replaced(self, proposed: dict[str, Any]
                   ) -> tuple[dict[str, Any], list[str], list[str], frozenset[str]]:
         """A proposal some of whose values cannot be read (module docstring): the values
@@ -681,9 +914,10 @@ class ShieldRuntime:
         return props, faults, replaced, frozenset(unknown)
 
     def fault(self, why: str, proposed: dict[str, Any]) -> Decision:
-        """The decision of a tick whose inputs cannot be read (module docstring; ``why``
-        says which and why, e.g. a host's binding that could not be evaluated): the
-        fallback's outputs (none without a fallback), every machine's state as it was;
+        """The decision of a tick the host could not decide on (``why`` says why, e.g. its
+        messages could not be made; an unreadable input is decided by :meth:`step` as any
+        value, module docstring): the fallback's outputs (none without a fallback), every
+        machine's state as it was;
         ``changed`` the output atoms whose fallback truth is not the proposal's (or whose
         proposal cannot be read either)."""
         if self.fallback is None:

@@ -1,28 +1,33 @@
-"""A shield's step is all or nothing, and no value it cannot read stops it.
+"""A shield's step never raises, an input it cannot read is any value, and no value it cannot
+read costs a trigger it can.
 
 Random requirement sets over the inputs ``a``, ``b`` (booleans), ``d`` (a number) and ``m``
 (a mode) and the outputs ``x``, ``y`` (booleans) and ``v`` (a number), random runs, and at
 random ticks a value the shield cannot read: an input or a proposal that is NaN, infinite
 (a proposal), missing, of the wrong type, or an integer no double holds. Each faulty run is
-judged against the fault-free run of a second shield (the reference):
+judged by brute force over the node table and by FRET's semantics, not against the
+fault-free run (issue 90: "an unreadable input is any value"):
 
-* a tick whose input cannot be read leaves the state as it was (the reference skips the
-  tick) and gives the fallback's outputs (none when the shield has none);
-* a tick whose proposal cannot be read decides as the reference does on the proposal with
-  the fallback's value in its place (without a fallback: outputs the shield's node table
-  says are safe, the reference then given them); it is an override, never the value it
-  could not read, never an exception;
-* every other tick decides as the reference does;
+* a tick whose input cannot be read gives outputs that are safe (the node table's ``safe``)
+  from every state the shield may be in with every valuation of the unread input's atoms
+  that real numbers give (``env_ok``): the belief the brute force keeps itself, every state
+  the decided outputs lead to from every case;
+* a tick whose proposal cannot be read, the belief one state, decides as the reference does
+  on the proposal with the fallback's value in its place (without a fallback: outputs the
+  node table says are safe); it is an override, never the value it could not read;
+* every other tick with the belief one state decides as the reference does from that state;
 
-and FRET's interval semantics finds no enforced requirement violated on the ticks whose
-inputs were read. The C form is held to the Python form on the same faulty runs (NaN inputs;
-NaN and infinite proposals: what a double can carry).
+and FRET's interval semantics finds no enforced requirement violated on the run **with the
+values the shield could not read** (the true inputs): a NaN in ``d`` at the tick ``a``
+rises loses nothing. The C form is held to the Python form on the same faulty runs (NaN
+inputs; NaN and infinite proposals: what a double can carry).
 """
 
 from __future__ import annotations
 
 import csv
 import io
+import itertools
 import math
 import subprocess
 import tempfile
@@ -35,11 +40,11 @@ from fretc.shield.build import build_shield
 from fretc.shield.emit_c import render_c
 from fretc.shield.emit_python import load_shield, render_python, tables
 from fretc.shield.plan import ShieldError
+from fretc.shield.machine import evaluate
 from fretc.shield.runtime import ShieldRuntime
 
 from _c_monitors import build as build_c, needs_cc, write
-from _gen import (CONDITIONS, RESPONSES, SCOPES, TIMINGS, atoms_of, compile_text, safe,
-                  verdicts)
+from _gen import (CONDITIONS, RESPONSES, SCOPES, TIMINGS, atoms_of, compile_text, verdicts)
 
 INPUTS = ["a", "b", "d", "m"]
 OUTPUTS = ["x", "y", "v"]
@@ -113,11 +118,35 @@ def _shield(text: str):
             raise
 
 
+def input_cases(m, ins: dict, unread: set) -> list[list[int]]:
+    """Brute force: the valuations of machine ``m``'s input atoms with the values ``ins``,
+    every atom reading a variable of ``unread`` free, those ``env_ok`` allows."""
+    free = [j for j, a in enumerate(m.inputs)
+            if ((_term_vars(a.term) if a.op == "pred" else {a.variable}) & unread)]
+    fixed = [0 if j in free else int(a.value(ins if a.op == "pred" else ins[a.variable]))
+             for j, a in enumerate(m.inputs)]
+    out = []
+    for bits in itertools.product((0, 1), repeat=len(free)):
+        v = list(fixed)
+        for j, b in zip(free, bits):
+            v[j] = b
+        if evaluate(m.nodes, m.env_ok, v + [0] * (len(m.outputs) + len(m.init))):
+            out.append(v)
+    return out
+
+
+def _term_vars(t) -> set:
+    if t[0] == "var":
+        return {t[1]}
+    return set().union(*(_term_vars(x) for x in t[1:] if isinstance(x, tuple)))
+
+
 def judged(shield, run) -> list:
-    """The faulty run stepped by the Python form, each tick judged against the reference
-    (module docstring); the decisions."""
+    """The faulty run stepped by the Python form, each tick judged (module docstring) with
+    a belief per machine kept by brute force; the decisions."""
     rt, ref = ShieldRuntime(tables(shield)), ShieldRuntime(tables(shield))
     fb = shield.fallback
+    beliefs = [{tuple(int(b) for b in m.init)} for m in shield.machines]
     decisions = []
     for ins, prop, fault in run:
         side, var, bad = fault or ("", "", None)
@@ -128,43 +157,60 @@ def judged(shield, run) -> list:
         got_prop = _with(prop, var, bad) if side == "proposal" else prop
         d = rt.step(got_ins, got_prop)
         decisions.append(d)
-        if read_in:
-            assert rt.state == before and d.overridden and d.fault.startswith(f"input {var}")
-            if fb is None:
-                assert d.outputs == {}, d
-            else:
-                assert {v: d.outputs[v] for v in fb["outputs"]} == fb["outputs"], (d, fb)
+        if d.lost or not all(beliefs):  # (past the bounds: the fallback's, none without one)
+            assert fb is None or {v: d.outputs[v] for v in fb["outputs"]} == fb["outputs"]
+            beliefs = [set() for _ in shield.machines]  # (no longer checked)
             continue
+        if read_in:
+            assert d.fault.startswith(f"input {var}"), d
         if read_out:
-            assert d.overridden and d.fault.startswith(f"proposal {var}"), d
+            assert d.overridden and f"proposal {var}" in d.fault, d
             for v in rt.output_kinds:
                 assert v in d.outputs and d.outputs[v] is not None
                 if rt.output_kinds[v] == "n":
                     assert math.isfinite(d.outputs[v]), d
-            if fb is not None and var in fb["outputs"]:
+        if not read_in and all(len(b) == 1 for b in beliefs):
+            ref.restore(before)
+            if read_out and fb is not None and var in fb["outputs"]:
                 want = ref.step(ins, {**prop, var: fb["outputs"][var]})
                 assert d.outputs == want.outputs and rt.state == ref.state, (d, want)
-            else:
-                for k, m in enumerate(shield.machines):
-                    assert safe(m, before[k], ins, atoms_of(m, d.outputs)), d
-                ref.step(ins, d.outputs)
-                assert rt.state == ref.state
-            continue
-        # (no fault, or one in a value no enforced requirement reads: passed through)
-        want = ref.step(got_ins, got_prop)
-        assert _same(d.outputs, want.outputs) and d[1:4] == want[1:4] and not d.fault \
-            and rt.state == ref.state, (d, want)
+            elif not read_out:
+                # (no fault, or one in a value no enforced requirement reads: passed through)
+                want = ref.step(got_ins, got_prop)
+                assert _same(d.outputs, want.outputs) and d[1:4] == want[1:4] \
+                    and not d.fault and rt.state == ref.state, (d, want)
+        # the outputs safe in every case, and the belief every state they lead to
+        unread = {var} if read_in else set()
+        seen = dict(ins)
+        if read_in:
+            seen[var] = 0.0 if var == "d" else False  # (any value: its atoms are free)
+        for k, m in enumerate(shield.machines):
+            if not d.outputs:
+                assert fb is None, d
+                beliefs[k] = set()
+                continue
+            outs = atoms_of(m, d.outputs)
+            nxt = set()
+            for state in beliefs[k]:
+                for i in input_cases(m, seen, unread):
+                    values = i + outs + list(state)
+                    assert evaluate(m.nodes, m.safe, values), (d, state, i)
+                    nxt.add(tuple(int(evaluate(m.nodes, r, values)) for r in m.next))
+            beliefs[k] = nxt
+            got = rt.state[k]
+            want_belief = sorted(nxt)
+            assert (tuple(got) == want_belief[0] if len(nxt) == 1
+                    else list(got[1:]) == want_belief), (got, want_belief)
     return decisions
 
 
 @SETTINGS
 @given(text=requirement_sets(), run=faulty_runs())
-def test_a_step_is_all_or_nothing_and_no_value_stops_it(text, run):
+def test_an_unread_input_is_any_value_and_no_trigger_is_lost(text, run):
     compiled, shield = _shield(text)
     decisions = judged(shield, run)
-    rt = ShieldRuntime(tables(shield))
-    trace = [{**ins, **d.outputs} for (ins, _p, f), d in zip(run, decisions)
-             if not (f and f[0] == "input" and f[1] in rt.input_kinds)]
+    # the run with the values the shield could not read: FRET's verdicts
+    trace = [{**ins, **d.outputs} for (ins, _p, _f), d in zip(run, decisions)]
     enforced = {r.id for r in shield.requirements}
     if trace and all(set(OUTPUTS) <= row.keys() and all(
             not isinstance(row[k], float) or math.isfinite(row[k]) for k in row)
@@ -176,7 +222,8 @@ def test_a_step_is_all_or_nothing_and_no_value_stops_it(text, run):
 def test_the_issue_example_nan_at_f1s_deadline_moves_no_machine(tmp_path):
     """F1/F2: ``a`` at tick 0, ``o`` proposed false throughout, ``x = NaN`` at F1's
     deadline. The step raised after F1's machine had moved, and F1 was violated on the next
-    ticks; now the state stays, the fallback's ``o`` is true, and F1 is enforced after."""
+    ticks; the NaN is now any value of ``x``: F1's machine moves (it reads no ``x``), ``o``
+    is true by F1's deadline, and ``p`` false (safe whatever ``x`` was)."""
     compiled = compile_text("F1: upon a ctrl shall within 2 ticks satisfy o\n"
                             "F2: whenever x > 2 ctrl shall immediately satisfy !p\n", tmp_path)
     shield = build_shield(compiled, ["a", "x"], ["o", "p"], fork=False)
@@ -185,14 +232,34 @@ def test_the_issue_example_nan_at_f1s_deadline_moves_no_machine(tmp_path):
              ({"a": False, "x": 0.0}), ({"a": False, "x": 0.0})]
     rows = []
     for k, ins in enumerate(ticks):
-        before = sh.state
         d = sh.step(ins, {"o": False, "p": False})
         if k == 2:
-            assert sh.state == before and d.fault == "input x is NaN"
-            assert d.outputs == {"o": True, "p": False}
-        else:
-            rows.append({**ins, **d.outputs})
-    assert verdicts(compiled, rows)["F1"] == "satisfied", rows
+            assert d.fault == "input x is NaN" and d.outputs == {"o": True, "p": False}, d
+        rows.append({**ins, "x": 3.0 if k == 2 else ins["x"], **d.outputs})
+    assert verdicts(compiled, rows) == {"F1": "satisfied", "F2": "satisfied"}, rows
+
+
+def test_a_nan_in_another_requirements_input_loses_no_trigger(tmp_path):
+    """Issue 90's case: ``G1: upon a ctrl shall for 3 ticks satisfy o``, ``G2: whenever x >
+    2 ctrl shall immediately satisfy !p``; ``a = true, x = NaN`` at tick 0, proposals false.
+    The tick was not counted, ``a``'s trigger lost and G1 violated at tick 1; every value of
+    ``x`` is now decided for: G1's three ticks of ``o`` start at tick 0, and G2 holds
+    whether ``x`` was 3 or 0."""
+    compiled = compile_text("G1: upon a ctrl shall for 3 ticks satisfy o\n"
+                            "G2: whenever x > 2 ctrl shall immediately satisfy !p\n", tmp_path)
+    shield = build_shield(compiled, ["a", "x"], ["o", "p"], fork=False)
+    for x_true in (3.0, 0.0):
+        sh = load_shield(render_python(shield))()
+        rows = []
+        for k in range(6):
+            d = sh.step({"a": k == 0, "x": math.nan if k == 0 else 0.0},
+                        {"o": False, "p": k == 0})
+            rows.append({"a": k == 0, "x": x_true if k == 0 else 0.0, **d.outputs})
+        assert [r["o"] for r in rows[:3]] == [True] * 3, rows
+        assert rows[0]["p"] is False and rows[0]["x"] == x_true
+        got = verdicts(compiled, rows)
+        assert got["G1"] == "satisfied" and got["G2"] == (
+            "satisfied" if x_true > 2 else "vacuous"), (got, rows)
 
 
 def test_a_declared_fallback_is_used_and_one_that_is_not_safe_is_refused(tmp_path):
@@ -202,8 +269,14 @@ def test_a_declared_fallback_is_used_and_one_that_is_not_safe_is_refused(tmp_pat
                           fallback={"x": True, "v": -2.0})
     assert shield.fallback is not None
     assert shield.fallback["outputs"] == {"x": True, "v": -2.0}
+    # (an unreadable ``a`` is any value: ``x`` must be true; ``v`` = 0 is safe, kept)
     d = ShieldRuntime(tables(shield)).step({"a": "?"}, {"x": False, "v": 0.0})
-    assert d.outputs == {"x": True, "v": -2.0} and d.fault.startswith("input a")
+    assert d.outputs == {"x": True, "v": 0.0} and d.fault.startswith("input a")
+    # (a machine that no longer knows its state: the declared fallback)
+    rt = ShieldRuntime(tables(shield))
+    rt.restore((("lost",),) * len(rt.machines))
+    d = rt.step({"a": False}, {"x": False, "v": 0.0})
+    assert d.outputs == {"x": True, "v": -2.0} and d.lost, d
     for bad, why in (({"x": False}, "x must be true"), ({"v": 3.0}, "(v <= 1) must be true"),
                      ({"w": True}, "names w, not an output"),
                      ({"x": 1.0}, "x is a boolean")):
@@ -219,12 +292,15 @@ def test_a_declared_fallback_is_used_and_one_that_is_not_safe_is_refused(tmp_pat
           suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
 @given(text=requirement_sets(), run=faulty_runs(length=40))
 def test_the_c_form_is_all_or_nothing_as_the_python_form(text, run):
-    """The faulty runs a double can carry (NaN inputs; NaN and infinite proposals), each
-    judged against the reference by :func:`judged`; the C runner gives the Python form's
-    outputs, override, reasons and fault at every tick."""
+    """The faulty runs a double can carry (NaN and infinite proposals), each judged by
+    :func:`judged`; the C runner gives the Python form's outputs, override, reasons and fault
+    at every tick. (An unreadable *input* is any value in the Python form, which keeps a
+    belief of states; the C form, of constant memory, still answers -1 with the fallback and
+    its state as it was: a trigger at that tick is lost there, an open item of issue 90, so
+    runs with input faults are not compared.)"""
     needs_cc()
     run = [(i, p, f) for i, p, f in run
-           if f is None or (isinstance(f[2], float) and f[1] in ("d", "v"))]
+           if f is None or (isinstance(f[2], float) and f[1] == "v")]
     assume(run)
     _compiled, shield = _shield(text)
     decisions = judged(shield, run)

@@ -130,7 +130,8 @@ def _overrides_text(r: Any) -> str:
     if not r.overrides:
         lines.append("  no requirement's machine overrode the proposal")
     for label, span in (("no message the bindings give (no requirement broken)", r.unshaped),
-                        ("an input not read: the fallback published", r.input_faults),
+                        ("an input not read: decided for every value it could have had",
+                         r.input_faults),
                         ("a proposal not read: replaced", r.proposal_faults),
                         ("nothing published (no fallback)", r.silent)):
         if span.ticks:
