@@ -88,9 +88,12 @@ def _audit_log(plan: AuditPlan, path: str, progress: Callable[[float], None] | N
 
         split = (split_clocks(path, plan.csv_period_ns, clocks) if len(clocks) > SPLIT_CLOCKS
                  else None)
+        # every clock read over the same bytes: the file's size now (a file still being
+        # written judged over one extent, :attr:`fretc.logs.CsvSource.extent`)
+        extent = os.path.getsize(path) if split is None else None
         return audit_clocks(plan, str(path), head, lambda p, c: _LogRun(
             p, path, split[c] if split is not None else
-            lambda: CsvSource(path, period_ns=plan.csv_period_ns, clock=c)
+            lambda: CsvSource(path, period_ns=plan.csv_period_ns, clock=c, extent=extent)
         ).run(progress))
     if plan.variants:
         sub, err = select_variant(plan, str(path))
@@ -274,7 +277,9 @@ class _LogRun:
         requirements' variables) is read with its streamable requirements judged as its
         rows pass (:mod:`fretc.audit.streamed`): only the others' columns are kept, and
         when some streamed requirement must be judged whole after all (its ticks unknown),
-        the file is read again keeping its columns too."""
+        the file is read again keeping its columns too, over the first read's bytes alone
+        (:attr:`~fretc.logs.CsvSource.extent`: rows appended since are not read, so every
+        requirement is judged over the same rows)."""
         plan, path = self.plan, self.path
         csv = str(path).lower().endswith(".csv") and not os.path.isdir(path)
         if not csv or keep is None or not self.stream:
@@ -294,7 +299,8 @@ class _LogRun:
         if streams.whole:  # (read again: the columns of those judged whole kept too)
             again = whole | {v for r in active if r.index in streams.whole
                              for v in r.variables}
-            source = open_log(path, csv_period_ns=plan.csv_period_ns, csv_keep=again)
+            source = open_log(path, csv_period_ns=plan.csv_period_ns, csv_keep=again,
+                              csv_extent=source.extent)
         return source
 
     def _check_inputs(self) -> bool:

@@ -30,7 +30,10 @@ trials; ``--coverage``; an automaton too large for tables) or where the trace le
 its ticks unknown, which the three-valued judge decides over the whole trace: a comparison
 reading NaN, an ``unknown`` cell in a column it reads, a ``gap`` or ``cut`` row. Those are
 known only once read, so the file is then read a second time, keeping those requirements'
-columns (:class:`fretc.audit.log` does both). Memory: a chunk of rows, the streams' state
+columns (:class:`fretc.audit.log` does both). Every read of one audit (the second one, and
+the values read again around a violation) stops at the bytes the first one read
+(:attr:`fretc.logs.CsvSource.extent`, the file's size when first opened): a file still being
+written is judged over the same rows for every requirement (issue 91, W1). Memory: a chunk of rows, the streams' state
 (a bounded window's last ticks, at most :data:`fretc.monitors.interval.MAX_LISTED` pending
 triggers listed per group, :data:`fretc.audit.verdict.MARGIN_POINTS` margin points) per
 requirement.
@@ -233,7 +236,8 @@ def _feed(s: _Streams, columns: Mapping[str, np.ndarray], k: int, times: np.ndar
 
 
 def values_around(path: str, period_ns: int, types: Mapping[str, str],
-                  wanted: Mapping[str, set[int]]) -> tuple[dict[int, int], dict[str, dict]]:
+                  wanted: Mapping[str, set[int]], extent: int | None = None
+                  ) -> tuple[dict[int, int], dict[str, dict]]:
     """The times of some rows and the values of some columns there, read again from the CSV
     trace ``path`` up to the last row wanted (the values a violation's evidence shows
     around its trigger and its violation, :func:`fretc.audit.finalize.values_around`).
@@ -243,6 +247,8 @@ def values_around(path: str, period_ns: int, types: Mapping[str, str],
         types: column -> ``"bool"`` or ``"float"``, as the whole file gave them (a chunk
             read early cannot tell a column of 0/1 cells from a number column).
         wanted: column -> the rows (0-based) whose values are wanted.
+        extent: the bytes of the file read (:attr:`fretc.logs.CsvSource.extent`, the
+            audit's first read's: rows appended since are not read; None: its size now).
 
     Returns:
         ``(times, values)``: row -> time (ns) of every wanted row; column -> row -> value
@@ -267,5 +273,5 @@ def values_around(path: str, period_ns: int, types: Mapping[str, str],
                     values[c][i] = bool(x) if types.get(c) == "bool" else float(x)
 
     CsvSource(path, period_ns=period_ns, keep=(), sink=sink, streamed=set(wanted),
-              keep_times=False, max_rows=last + 1)
+              keep_times=False, max_rows=last + 1, extent=extent)
     return times, values

@@ -40,7 +40,8 @@ def streamed_values(plan: AuditPlan, source: CsvSource, violated: list[Requireme
     """The values and message log times of the violated requirements ``violated`` at the
     ticks :func:`fretc.audit.finalize.shown_ticks` shows around their first violation
     (``v.values``, ``v.sources``), read again from the trace in one pass up to the last
-    of them (:func:`fretc.audit.streamed.values_around`)."""
+    of them (:func:`fretc.audit.streamed.values_around`), within the bytes the audit first
+    read (:attr:`fretc.logs.CsvSource.extent`)."""
     want: dict[str, set[int]] = {}
     shown = {}
     for r in violated:
@@ -48,7 +49,8 @@ def streamed_values(plan: AuditPlan, source: CsvSource, violated: list[Requireme
         shown[r.index] = ticks = shown_ticks(plan.config.window, v, streamed[r.index].n)
         for name in r.variables:
             want.setdefault(name, set()).update(ticks)
-    times, values = values_around(str(source.path), source.period_ns, source.types, want)
+    times, values = values_around(str(source.path), source.period_ns, source.types, want,
+                                  source.extent)
     for r in violated:
         v, ticks = verdicts[r.index], shown[r.index]
         for name in r.variables:

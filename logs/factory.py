@@ -51,7 +51,7 @@ def open_log(path: str | os.PathLike, *, fallback_typestore: Typestore | Stores 
              check_data_crc: bool = True, csv_period_ns: int = NS_PER_S,
              msg_path: Sequence[str] = (), csv_keep: Iterable[str] | None = None,
              csv_sink: RowSink | None = None, csv_streamed: Iterable[str] = (),
-             csv_keep_times: bool = True) -> LogSource:
+             csv_keep_times: bool = True, csv_extent: int | None = None) -> LogSource:
     """Open a recorded run for reading.
 
     Args:
@@ -71,6 +71,9 @@ def open_log(path: str | os.PathLike, *, fallback_typestore: Typestore | Stores 
         csv_sink, csv_streamed, csv_keep_times: CSV only: the columns ``csv_streamed``
             handed to ``csv_sink`` a chunk of rows at a time as the file is read, and
             whether the rows' times are kept (:class:`~fretc.logs.csv.source.CsvSource`).
+        csv_extent: CSV only: the bytes of the file read, from its start (None: its size
+            when opened); an audit that reads a trace again passes the first read's
+            ``extent``, so a file still growing is judged over the same rows by every pass.
 
     Returns:
         A :class:`LogSource` (McapSource, BagSource, CsvSource, UlogSource or
@@ -109,7 +112,8 @@ def open_log(path: str | os.PathLike, *, fallback_typestore: Typestore | Stores 
         return McapSource(p, check_data_crc=check_data_crc)
     if suffix == ".csv":
         return CsvSource(p, period_ns=csv_period_ns, keep=csv_keep, sink=csv_sink,
-                         streamed=csv_streamed, keep_times=csv_keep_times)
+                         streamed=csv_streamed, keep_times=csv_keep_times,
+                         extent=csv_extent)
     if suffix == ".ulg":
         from fretc.logs.flight.ulog import UlogSource
 

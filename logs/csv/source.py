@@ -4,6 +4,7 @@ of variable names, one row per tick (format in :class:`CsvSource`)."""
 from __future__ import annotations
 
 import csv
+import io
 import os
 import re
 from array import array
@@ -11,7 +12,7 @@ from bisect import bisect_right
 from collections.abc import Iterable, Iterator
 from itertools import islice
 from types import SimpleNamespace
-from typing import NamedTuple, TextIO
+from typing import Any, NamedTuple, TextIO
 
 import numpy as np
 
@@ -256,6 +257,15 @@ class CsvSource(LogSource):
     of its own (``fretc simulate``'s 2,000 ticks) stops reading the file a chunk of rows past
     it (:attr:`over_max_rows`), in bounded memory.
 
+    ``extent``: the bytes of the file read, from its start (None: its size when opened,
+    kept in :attr:`extent`). Rows past it are never read, so a file still being written (a
+    logger appending rows during an audit) is read over the same rows by every pass of one
+    audit: the audit opens the file again for requirements judged whole, and reads values
+    around a violation again, each with the first open's :attr:`extent` (issue 91, W1: a
+    CSV appended to during the audit had one requirement judged on 3,001,000 rows and
+    another on 3,000,000, both claiming the same last tick). A last row the writer had not
+    finished at the extent reads as a row cut short (its error names its line).
+
     ``sink`` (:data:`fretc.logs.csv.read.RowSink`): while the file is read, the values of the
     columns named in ``streamed`` are handed to it a chunk of rows at a time, with the rows'
     times, and kept only when ``keep`` names them too (an audit judges requirements as the
@@ -278,10 +288,16 @@ class CsvSource(LogSource):
     def __init__(self, path: str | os.PathLike, *, period_ns: int = NS_PER_S,
                  clock: str | None = None, keep: Iterable[str] | None = None,
                  max_rows: int | None = None, sink: RowSink | None = None,
-                 streamed: Iterable[str] = (), keep_times: bool = True) -> None:
+                 streamed: Iterable[str] = (), keep_times: bool = True,
+                 extent: int | None = None) -> None:
         super().__init__(path)
         if period_ns <= 0:
             raise ValueError("period_ns must be positive")
+        if extent is not None and extent < 0:
+            raise ValueError("extent must be at least 0 bytes")
+        #: the bytes of the file read (class docstring): its size when first opened, or the
+        #: ``extent`` given
+        self.extent: int | None = extent
         self.period_ns = period_ns
         self.columns: list[str] = []
         self.types: dict[str, str] = {}
@@ -321,12 +337,19 @@ class CsvSource(LogSource):
         ``(line, CsvError)`` where it stops being UTF-8 CSV (:class:`_FileRows`, which
         also gives them a chunk at a time).
 
+        Only the first :attr:`extent` bytes are read (the file's size now when it is None,
+        which then becomes the extent).
+
         Raises:
             LogError: the file cannot be opened."""
         try:
-            f = open(self.path, newline="", encoding="utf-8-sig")
+            raw = open(self.path, "rb", buffering=0)
         except OSError as exc:
             raise LogError(self.path, f"cannot read: {exc.strerror or exc}") from None
+        if self.extent is None:
+            self.extent = os.fstat(raw.fileno()).st_size
+        bounded = io.BufferedReader(_Extent(raw, self.extent), buffer_size=1 << 16)
+        f = io.TextIOWrapper(bounded, encoding="utf-8-sig", newline="")
         return _FileRows(self.path, f)
 
     def _clock_lines(self) -> dict[str, list[str]]:
@@ -528,6 +551,30 @@ class CsvSource(LogSource):
             self.counts[CSV_TOPIC] = self.counts.get(CSV_TOPIC, 0) + 1
             yield Message(CSV_TOPIC, t, t, None, SimpleNamespace(**row.values))
         self._start_time, self._end_time = first, last
+
+
+class _Extent(io.RawIOBase):
+    """The first ``extent`` bytes of an open binary file (:attr:`CsvSource.extent`): reads
+    end there, whatever was written after."""
+
+    def __init__(self, f: io.FileIO, extent: int) -> None:
+        super().__init__()
+        self.f, self.left = f, extent
+
+    def readable(self) -> bool:
+        return True
+
+    def readinto(self, b: Any) -> int:
+        if self.left <= 0:
+            return 0
+        view = memoryview(b)
+        got = self.f.readinto(view[:min(len(view), self.left)]) or 0
+        self.left -= got
+        return got
+
+    def close(self) -> None:
+        self.f.close()
+        super().close()
 
 
 class _FileRows:
