@@ -14,10 +14,12 @@ binding file); a declared fallback that is not in ``robust`` is refused with the
 the requirements it breaks. Otherwise the shield takes the robust valuation the node table
 reaches first taking each atom's ``--prefer``\\ red value, then false, where it can (a
 fixed order: the same shield gives the same fallback). The numbers: a declared one as
-given; else the number of the message the bindings give for the valuation (Safe-ROS's
-zero Twist), the recorded numbers of a cluster, or the number nearest 0 with the
-valuation's truths (a stopped actuator's). When no valuation is robust there is no
-fallback (noted): the forms then give no outputs at such a tick (Python: an empty
+given; else **rest**, 0, whenever the valuation's truths allow it (a stopped actuator: the
+message the bindings solved for the valuation may read 0.009 m/s as "not moving" too, and
+was the fallback; the host's message is made from the decided values and checked, so 0 is
+published); else the number of the message the bindings give for the valuation, the
+recorded numbers of a cluster, or the number nearest 0 with the valuation's truths. When no
+valuation is robust there is no fallback (noted): the forms then give no outputs at such a tick (Python: an empty
 ``Decision.outputs``; C: ``-1``, the corrected outputs untouched; the ROS 2 node publishes
 nothing but ``/diagnostics``).
 """
@@ -199,7 +201,9 @@ def _numbers(m: Machine, bits: list[int], declared: dict[str, Any], integers: Se
         specs = [m.outputs[j].spec for j in idx]
         truths = [bits[j] for j in idx]
         x = given.get(v)
-        if x is not None and math.isfinite(x) and all(
+        if all(_truth(s, {v: 0.0}) == bool(t) for s, t in zip(specs, truths)):
+            out[v] = 0.0  # (rest whenever the valuation's truths allow it)
+        elif x is not None and math.isfinite(x) and all(
                 _truth(s, {v: x}) == bool(t) for s, t in zip(specs, truths)) and (
                 v not in integers or x == math.floor(x)):
             out[v] = x

@@ -398,3 +398,25 @@ def test_a_message_shield_whose_messages_fail_takes_no_step(tmp_path, monkeypatc
     stop = ms.fallback_messages(200_000_000)
     assert [(t, getattr(m, "data", None)) for t, m in stop][1] == ("/gwendolen_control", True)
     assert stop[0][1].linear.x == 0.0 and ms.runtime.state == before
+
+
+def test_the_fallback_is_rest_where_its_atoms_allow_it(tmp_path):
+    """Issue 90: a shield whose output is bound to ``/cmd_vel.linear.x`` with ``R1: whenever
+    too_close ctrl shall immediately satisfy cmd_linear < 0.01 & cmd_linear > -0.01``: its
+    fallback commanded 0.009 m/s (the message the bindings solved for the valuation), not
+    rest; rest (0) now, as the summary prints."""
+    from click.testing import CliRunner
+
+    from fretc.cli import main
+
+    (tmp_path / "r.fret").write_text(
+        "@inputs too_close\n@outputs cmd_linear\nR1: whenever too_close ctrl shall immediately "
+        "satisfy cmd_linear < 0.01 & cmd_linear > -0.01\n", encoding="utf-8")
+    (tmp_path / "r.bindings.toml").write_text(
+        '[tick]\nperiod = "100 ms"\n[variables]\ntoo_close = "min(/scan.ranges) < 0.5"\n'
+        'cmd_linear = "/cmd_vel.linear.x"\n', encoding="utf-8")
+    got = CliRunner().invoke(main, ["shield", str(tmp_path / "r.fret"), "-b",
+                                    str(tmp_path / "r.bindings.toml")])
+    assert got.exit_code == 0, got.output
+    assert "fallback (a tick whose inputs cannot be read): cmd_linear=0\n" in got.output, \
+        got.output
