@@ -16,6 +16,20 @@ distribution rosbags knows (ROS 1 Noetic for ``ros1msg``; Dashing to the newest 
 nested messages expanded, fixed array lengths kept; bounds of strings and sequences and
 constants are left out (they do not change the bytes). A type no distribution defines (a
 project's own message) is not checked.
+
+Spellings of one type read as equal (:data:`ROS2_SAME`, :data:`ROS1_SAME`; issue 91): a
+primitive the interface language names twice is one type, so a schema spelling
+``DiagnosticStatus.level`` ``uint8`` where ROS's own definition writes ``byte`` is ROS's
+layout. In ROS 2, ``.msg``'s ``char`` is IDL ``uint8`` and ``byte`` is IDL ``octet``
+(rosidl_adapter's ``MSG_TYPE_TO_IDL``, the table of the ROS 2 "About interfaces" page: byte
+is ``uint8_t`` in C++, DDS ``octet``), and an ``octet`` and a ``uint8`` are each one
+unsigned byte in XCDR, aligned to 1 (OMG DDS-XTypes 1.3, 7.4.3.5), so ``byte``, ``char``
+(rosbags reads IDL's ``octet`` as ``byte``) and ``uint8`` lay out the same bytes. In ROS 1,
+``byte`` is a deprecated alias of ``int8`` and ``char`` of ``uint8`` (the ROS wiki's msg
+page, "Built-in types"). Signedness is never waived: ``int8`` and ``uint8`` differ in ROS 2.
+
+A difference is named by its field's path from the message, nested messages, arrays and
+sequences of messages included (``status[].values[].key``).
 """
 
 from __future__ import annotations
@@ -26,11 +40,19 @@ from typing import Any, TYPE_CHECKING
 if TYPE_CHECKING:
     from rosbags.typesys.store import Typestore
 
-__all__ = ["layout_mismatch", "layout"]
+__all__ = ["layout_mismatch", "layout", "same_spelling", "ROS2_SAME", "ROS1_SAME"]
 
 _ROS2 = ("ros2_humble", "ros2_jazzy", "ros2_iron", "ros2_kilted", "ros2_lyrical",
          "ros2_foxy", "ros2_galactic", "ros2_eloquent", "ros2_dashing")
 _MAX_DEPTH = 32
+
+#: ROS 2: primitive spellings of one type (module docstring: rosidl_adapter maps ``.msg``'s
+#: ``byte`` to IDL ``octet`` and ``char`` to ``uint8``; octet and uint8 are one unsigned
+#: byte each in XCDR), each mapped to the one the comparison uses
+ROS2_SAME = {"byte": "uint8", "char": "uint8", "octet": "uint8"}
+#: ROS 1: the deprecated aliases (the ROS wiki's msg page: ``byte`` is ``int8``, ``char``
+#: is ``uint8``)
+ROS1_SAME = {"byte": "int8", "char": "uint8"}
 
 
 @cache
@@ -44,6 +66,23 @@ def _store(name: str):
 def _ref_layout(store_name: str, typename: str) -> tuple | None:
     ref = _store(store_name)
     return layout(ref, typename) if typename in ref.fielddefs else None
+
+
+def same_spelling(kind_layout: tuple, same: dict[str, str]) -> tuple:
+    """A layout (:func:`layout`) with every primitive spelled as ``same`` maps it
+    (:data:`ROS2_SAME` or :data:`ROS1_SAME`), so that two spellings of one type compare
+    equal; the field names, order, nesting and array lengths are kept."""
+    return tuple((name, _same_kind(kind, same)) for name, kind in kind_layout)
+
+
+def _same_kind(kind: tuple, same: dict[str, str]) -> tuple:
+    if kind[0] == "base":
+        return ("base", same.get(kind[1], kind[1]))
+    if kind[0] == "msg":
+        return ("msg", same_spelling(kind[1], same))
+    if kind[0] == "array":
+        return ("array", _same_kind(kind[1], same), kind[2])
+    return ("seq", _same_kind(kind[1], same))
 
 
 def layout(store: Typestore, typename: str, depth: int = 0) -> tuple:
@@ -72,7 +111,12 @@ def _kind(store, node, depth: int) -> tuple:
     return ("seq", _kind(store, inner, depth))
 
 
-def _first_difference(got: tuple, want: tuple, prefix: str = "") -> str:
+def _first_difference(got: tuple, want: tuple, prefix: str = "",
+                      same: dict[str, str] | None = None) -> str:
+    """The first difference of the layouts ``got`` (the log's) and ``want`` (ROS's), in
+    words naming the field by its path (``prefix``): two spellings ``same`` maps to one
+    primitive are not a difference; the types are shown as each layout spells them."""
+    same = same or {}
     for k in range(max(len(got), len(want))):
         if k >= len(got):
             return f"it lacks {prefix}{want[k][0]}"
@@ -82,11 +126,26 @@ def _first_difference(got: tuple, want: tuple, prefix: str = "") -> str:
         if gn != wn:
             return f"field {k + 1}{' of ' + prefix[:-1] if prefix else ''} is {gn!r} where " \
                    f"ROS has {wn!r}"
-        if gk != wk:
-            if gk[0] == wk[0] == "msg":
-                return _first_difference(gk[1], wk[1], f"{prefix}{gn}.")
+        if _same_kind(gk, same) != _same_kind(wk, same):
+            inner = _inner_difference(gk, wk, f"{prefix}{gn}", same)
+            if inner is not None:
+                return inner
             return f"{prefix}{gn} is {_show(gk)} where ROS has {_show(wk)}"
     return "the layouts differ"
+
+
+def _inner_difference(got: tuple, want: tuple, path: str, same: dict[str, str]
+                      ) -> str | None:
+    """The first difference inside two kinds of the field at ``path`` that are both
+    messages, or both arrays of one length or sequences whose items differ (``[]`` added to
+    the path, as far down as messages go), or None when the kinds themselves differ."""
+    if got[0] != want[0]:
+        return None
+    if got[0] == "msg":
+        return _first_difference(got[1], want[1], f"{path}.", same)
+    if got[0] == "seq" or (got[0] == "array" and got[2] == want[2]):
+        return _inner_difference(got[1], want[1], f"{path}[]", same)
+    return None
 
 
 def _show(kind: tuple) -> str:
@@ -102,12 +161,15 @@ def _show(kind: tuple) -> str:
 def layout_mismatch(schema_encoding: str, store: Any, typename: str) -> str | None:
     """Why the definition of ``typename`` in ``store`` (built from a log's schema of
     ``schema_encoding``) is not ROS's own (a sentence naming the first difference from the
-    newest matching distribution), or None when it matches one or no distribution defines
-    ``typename``.
+    newest matching distribution, by its field's path), or None when it matches one or no
+    distribution defines ``typename``. Spellings of one primitive type are equal (module
+    docstring: :data:`ROS2_SAME`, :data:`ROS1_SAME`).
 
     Raises nothing: a definition that cannot be laid out (nested too deep) is a mismatch.
     """
-    names = ("ros1_noetic",) if schema_encoding == "ros1msg" else _ROS2
+    ros1 = schema_encoding == "ros1msg"
+    names = ("ros1_noetic",) if ros1 else _ROS2
+    same = ROS1_SAME if ros1 else ROS2_SAME
     refs = [r for r in (_ref_layout(name, typename) for name in names) if r is not None]
     if not refs:
         return None
@@ -115,8 +177,8 @@ def layout_mismatch(schema_encoding: str, store: Any, typename: str) -> str | No
         got = layout(store, typename)
     except (KeyError, RecursionError) as exc:
         return f"its definition cannot be laid out ({exc})"
-    if any(got == want for want in refs):
+    if any(same_spelling(got, same) == same_spelling(want, same) for want in refs):
         return None
     return (f"the log's definition of {typename} is not ROS's ("
-            f"{_first_difference(got, refs[0])}): values read with it would be other "
+            f"{_first_difference(got, refs[0], '', same)}): values read with it would be other "
             "fields'")
