@@ -310,7 +310,7 @@ def _numbers(compiled: Sequence[Any]) -> frozenset[str]:
 def _machine(worker: SpotWorker, comp: Component, p: Plan) -> Machine:
     """The machine of one component (module docstring)."""
     ans = worker.ask(("call", synthesize, (comp.game_pts, comp.game_inputs, comp.env_inv,
-                                           comp.ctl_inv, comp.watch)))
+                                           comp.ctl_inv, comp.watch, comp.raw_pts)))
     if ans == UNKNOWN:
         why = worker.failures[-1] if worker.failures else "no reason given"
         if why.startswith("RuntimeError:"):  # a defect of the synthesis, not a budget

@@ -102,6 +102,10 @@ class Component:
     #: per assumption its "held at every tick so far" (``H A``, with the game's atom names),
     #: whose values the forms report (:mod:`fretc.shield.runtime`)
     watch: list[Node] = field(default_factory=list)
+    #: with assumptions, the requirements' pt formulas without them (the game's atom
+    #: names): the fallback keeps these whatever the environment does, so that it never
+    #: relies on an assumption that broke (:mod:`fretc.shield.synthesis`)
+    raw_pts: list[Node] = field(default_factory=list)
 
     @property
     def ids(self) -> list[str]:
@@ -380,9 +384,11 @@ def _component(items: list[CheckItem], inputs: list[str], groups: list[list[str]
         else:
             ctl_inv = ir.and_(ctl_inv, inv)
     game_pts = [preds.substitute(f, names) for f in pts]
+    raw_pts: list[Node] = []
     watch = [ir.H(preds.substitute(f, names)) for f in apts]
     if watch:  # (a requirement is kept while some assumption has been broken)
         held = ir.and_all(*watch)
+        raw_pts = list(game_pts)
         game_pts = [ir.or_(f, ir.not_(held)) for f in game_pts]
     try:
         atoms = game_atoms(game_pts)
@@ -403,7 +409,7 @@ def _component(items: list[CheckItem], inputs: list[str], groups: list[list[str]
                 [a for a in atoms if _variable(a) in g], bindings, notes, group))
             messages.append(group)
     return Component(items, env_inv, ctl_inv, messages, clusters, names, game_pts,
-                     game_inputs, list(assumptions), watch)
+                     game_inputs, list(assumptions), watch, raw_pts)
 
 
 def enforced_pts(items: list[CheckItem]) -> list[Node]:

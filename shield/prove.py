@@ -18,7 +18,18 @@ exponentially with them); past either the answer is unknown, and says so.
 With assumptions of the environment (``fretc shield --assume``, :mod:`fretc.shield.plan`) a
 requirement is proved **under** them: the product is with ``A1 & ... & An & !R`` (each
 assumption's ft_inf), so only the runs of an environment that keeps every assumption count,
-and the report says so.
+and the report says so. A proof under assumptions is only worth the runs it covers, so two
+answers are never "holds" (issue 90: ``A1: environment shall always satisfy a & !a`` was
+"proved" without a word):
+
+* **vacuous** (every requirement of the machine): no run of the closed loop keeps the
+  assumptions (the product with ``A1 & ... & An`` is empty): nothing is proved;
+* **vacuous** (one requirement): no run of the closed loop that keeps the assumptions fires
+  its trigger (enters its scope and meets its condition, :func:`fretc.check.items.make_item`'s
+  ``trigger``, as ``fretc check``'s vacuity): it holds only because the assumptions exclude
+  every case it speaks of (``A5: always !a`` for ``whenever a ... immediately o``).
+
+Either is "NOT PROVED" (exit 1), with the reason.
 """
 
 from __future__ import annotations
@@ -43,7 +54,7 @@ MAX_STATES = 200_000
 @dataclass
 class Proof:
     """The result: ``results`` requirement id -> ``"holds"`` / ``"violated"`` /
-    ``"unknown"``, ``why`` id -> the reason of an unknown or a violating run (a lasso of
+    ``"vacuous"`` (module docstring) / ``"unknown"``, ``why`` id -> the reason of an unknown or a violating run (a lasso of
     letters), ``sizes`` per machine ``(states, edges, table nodes)``, ``blocking`` the
     states where the shield has no safe output (empty when it never blocks)."""
 
@@ -232,6 +243,16 @@ def prove_shield(shield: Shield, compiled: Sequence[Any]) -> Proof:
         aut = _automaton(m, loop)
         proof.sizes.append((ids, aut.num_states(), aut.num_edges(), len(m.nodes)))
         assumed = [ir.fold_constants(by_id[a].formalization.ft_inf) for a in m.assumptions]
+        if assumed and max_bound(assumed) <= SPOT_MAX_BOUND:
+            keeps = spot.translate(spot.formula.And(
+                [spot.formula(to_spot(a)) for a in assumed]), dict=aut.get_dict())
+            if spot.product(aut, keeps).accepting_word() is None:
+                for rid in m.requirements:
+                    proof.under[rid] = tuple(m.assumptions)
+                    proof.results[rid] = "vacuous"
+                    proof.why[rid] = ("no run of the closed loop keeps the assumptions "
+                                      f"{', '.join(m.assumptions)}: nothing is proved")
+                continue
         for rid in m.requirements:
             phi = ir.fold_constants(by_id[rid].formalization.ft_inf)  # (as the game read it)
             proof.under[rid] = tuple(m.assumptions)
@@ -246,8 +267,32 @@ def prove_shield(shield: Shield, compiled: Sequence[Any]) -> Proof:
             run = spot.product(aut, neg).accepting_word()
             if run is None:
                 proof.results[rid] = "holds"
+                if assumed:
+                    _vacuity(proof, rid, by_id[rid], assumed, aut, m.assumptions)
             else:
                 proof.results[rid] = "violated"
                 run.simplify()
                 proof.why[rid] = f"a run of the closed loop violates it: {run}"
     return proof
+
+
+def _vacuity(proof: Proof, rid: str, compiled: Any, assumed: list[Any], aut: Any,
+             names: Sequence[str]) -> None:
+    """A requirement proved under assumptions: ``"vacuous"`` instead of ``"holds"`` when no
+    run of the closed loop ``aut`` keeping the assumptions ``assumed`` (ft_inf) fires its
+    trigger (module docstring)."""
+    import spot
+
+    from fretc.check.items import make_item
+
+    trigger = make_item(0, compiled).trigger
+    if trigger is None or max_bound([trigger, *assumed]) > SPOT_MAX_BOUND:
+        return
+    fires = spot.translate(spot.formula.And(
+        [spot.formula(to_spot(a)) for a in assumed] + [spot.formula(to_spot(trigger))]),
+        dict=aut.get_dict())
+    if spot.product(aut, fires).accepting_word() is None:
+        proof.results[rid] = "vacuous"
+        proof.why[rid] = (f"under {', '.join(names)} no run of the closed loop fires its "
+                          "trigger (enters its scope and meets its condition): it holds only "
+                          "vacuously")

@@ -18,7 +18,16 @@ The shield's functions (:mod:`fretc.shield.machine`) are exported as one node ta
 * the next-value function of every state bit, and ``env_ok``;
 * ``robust``: the output valuations ``safe`` from every state outside ``Lose`` with every
   input letter ``env_ok`` allows (over the output atoms only): the fallback of a tick whose
-  inputs cannot be read is one of them (:func:`fretc.shield.build.fallback_of`).
+  inputs cannot be read is one of them (:func:`fretc.shield.build.fallback_of`). With
+  assumptions of the environment the game counts a requirement kept once one has broken, so
+  ``robust`` alone could rely on them (``A5: always !a`` made ``!o`` robust for ``whenever a
+  ... immediately o``, and the shield overrode a correct controller with it once ``a``
+  came): it is then also required to keep each requirement's own pt formula (``raw``) now
+  and the next state out of that formula's own attractor, from every state outside it,
+  whatever the environment gives (each requirement alone: one no controller keeps without
+  the assumptions, Safe-ROS's R5 ``clearance > 0``, is lost from every state and adds
+  nothing, where the conjunction's attractor would have swallowed the others; no
+  valuation: no fallback, and the shield says so).
 
 Könighofer et al., "Shield synthesis", FMSD 51 (2017), section 4: a safety shield is the
 winning region of the safety game, and a minimally interfering one changes a proposal only
@@ -38,12 +47,14 @@ __all__ = ["synthesize"]
 
 
 def synthesize(pts: Sequence[Node], inputs: Sequence[str], env_inv: Node, ctl_inv: Node,
-               watch: Sequence[Node] = (), *, budget: Budget | None = None) -> dict[str, Any]:
+               watch: Sequence[Node] = (), raw: Sequence[Node] = (), *,
+               budget: Budget | None = None) -> dict[str, Any]:
     """The shield of the pt formulas ``pts`` (one per enforced requirement, in order):
     ``inputs`` the environment's FRET variables, ``env_inv``/``ctl_inv`` the propositional
     consistency of the input / output atoms (numbers, messages); ``watch`` sub-formulas of
     ``pts`` whose values are exported too (the assumptions' ``H A``,
-    :mod:`fretc.shield.plan`).
+    :mod:`fretc.shield.plan`); ``raw`` (with assumptions) the requirements' pt formulas
+    without them, sub-formulas of ``pts``, which ``robust`` keeps too (module docstring).
 
     Returns ``{"realizable": True, "atoms": [(IR atom, is input)], "init": [bool],
     "nodes": [(var, lo, hi)], "safe": int, "next": [int], "keep": [int], "env_ok": int,
@@ -86,6 +97,13 @@ def synthesize(pts: Sequence[Node], inputs: Sequence[str], env_inv: Node, ctl_in
         # the (consistent) inputs (the outputs of a tick whose inputs cannot be read)
         robust = b.bdd_forall(b.bdd_imp(b.bdd_and(b.bdd_not(lose), game.env_ok), safe),
                               b.bdd_and(game.cur_set, game.in_set))
+        for f in raw:  # (not relying on the assumptions: module docstring)
+            ok_raw = m.value(f)
+            lose_raw = _attractor(game, ok_raw, meter)
+            robust = b.bdd_and(robust, b.bdd_forall(
+                b.bdd_imp(b.bdd_and(b.bdd_not(lose_raw), game.env_ok),
+                          _stay(game, ok_raw, lose_raw)),
+                b.bdd_and(game.cur_set, game.in_set)))
         watched = [m.value(w) for w in watch]  # (planned: sub-formulas of the game's pts)
         bdds = [safe, *nexts, *keeps, game.env_ok, game.ctl_ok, robust, *watched]
         roots = [table.add(f) for f in bdds]

@@ -151,3 +151,51 @@ def test_safe_ros_r5_is_enforced_and_proved_under_the_shipped_assumptions(tmp_pa
     no_brake.write_text(text.split("\nE3:")[0] + "\nE4:" + text.split("\nE4:")[1])
     got = _safe_ros("--assume", str(no_brake))
     assert got.exit_code == 2 and "unrealizable" in got.output, got.output
+
+
+def _ab(tmp_path: Path, assumption: str):
+    """Issue 90's set: ``R1: always p``, ``R2: whenever a immediately o``, under one
+    assumption of the environment: (compiled requirements, assumption, shield)."""
+    (tmp_path / "r.fret").write_text("R1: ctrl shall always satisfy p\n"
+                                     "R2: whenever a ctrl shall immediately satisfy o\n")
+    (tmp_path / "a.fret").write_text(assumption + "\n")
+    compiled = compile_entries(load_requirements([tmp_path / "r.fret"]))
+    assumed = compile_entries(load_requirements([tmp_path / "a.fret"]))
+    return compiled, assumed, build_shield(compiled, ["a"], ["p", "o"], fork=False,
+                                           assumptions=assumed)
+
+
+def test_a_broken_assumption_never_turns_the_shield_against_a_correct_controller(tmp_path):
+    """Issue 90: under ``A5: environment shall always satisfy !a`` the fallback was ``p,
+    !o`` (robust only while A5 holds), and once ``a`` came the shield overrode a correct
+    controller with ``o = false`` at every tick (R2 failed 101 of 200 ticks). The fallback
+    now keeps the requirements without the assumptions: R2 kept after A5 breaks."""
+    compiled, _assumed, shield = _ab(tmp_path, "A5: environment shall always satisfy !a")
+    assert shield.fallback is not None and shield.fallback["outputs"] == {"p": True, "o": True}
+    rt = ShieldRuntime(tables(shield))
+    rows = []
+    for k in range(200):
+        a = k >= 99
+        d = rt.step({"a": a}, {"p": True, "o": a})  # (a correct controller)
+        rows.append({"a": a, **d.outputs})
+        assert d.broken == (("A5",) if a else ()), d
+    assert verdicts(compiled, rows) == {"R1": "satisfied", "R2": "satisfied"}
+
+
+@pytest.mark.parametrize("assumption,why", [
+    ("A5: environment shall always satisfy !a",
+     "under A5 no run of the closed loop fires its trigger"),
+    ("A1: environment shall always satisfy a & !a",
+     "no run of the closed loop keeps the assumptions A1: nothing is proved")])
+def test_prove_never_calls_an_impossible_or_vacuous_assumption_proved(tmp_path, assumption,
+                                                                      why):
+    """Issue 90: an assumption no run can keep (A1) was "proved" without a word, and one that
+    makes R2 vacuous (A5) "proved" R2: both are "vacuous" with the reason, NOT PROVED."""
+    compiled, assumed, shield = _ab(tmp_path, assumption)
+    proof = prove_shield(shield, [*compiled, *assumed])
+    assert proof.results["R2"] == "vacuous" and why in proof.why["R2"], proof.text()
+    assert not proof.holds and "NOT PROVED" in proof.text()
+    # (an assumption every run keeps proves both)
+    compiled, assumed, shield = _ab(tmp_path, "A2: environment shall always satisfy a | !a")
+    proof = prove_shield(shield, [*compiled, *assumed])
+    assert proof.results == {"R1": "holds", "R2": "holds"} and proof.holds, proof.text()
