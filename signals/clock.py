@@ -264,14 +264,20 @@ def silence_end(source: Any, bindings: Bindings | None, variables: Iterable[Bind
     its end, the last message the watch received. A topic that falls silent before the log
     ends is then judged stale to the end, as the log shows it (a LiDAR that dies while the
     recording goes on); ticking only to its own last message, a staleness requirement over
-    that topic alone was satisfied. None otherwise (the clock ends at its topics' last
-    message: a log that states its end only once read whole, a flight log)."""
+    that topic alone was satisfied. A flight log (PX4 ULog, ArduPilot DataFlash) is read
+    whole when opened and states its end as ``log_end`` (the last log time of a message of
+    any topic; issue 91: a GPS that died before the end of a flight was never stale), used
+    before ``end_time`` (which a flight log knows only once a pass has read it, and then
+    of the topics that pass read). None otherwise (the clock ends at its topics' last
+    message: a log that states its end only once read whole)."""
     if bindings is None or bindings.time_base != "log" or bindings.tick.period_ns is None:
         return None
     if not any(isinstance(n, FuncCall) and n.func == "age" for b in variables
                for n in walk(b.ast)):
         return None
-    end = getattr(source, "end_time", None)
+    end = getattr(source, "log_end", None)
+    if end is None:
+        end = getattr(source, "end_time", None)
     return int(end) if end is not None else None
 
 

@@ -69,6 +69,8 @@ class DataflashSource(LogSource):
         #: the earliest TimeUS (ns) of a record the latest pass read, of any topic: the log's
         #: start whichever topics a pass delivers (the origin of an audit's times)
         self._first_any: int | None = None
+        #: the latest TimeUS (ns) of a record the latest pass read, of any topic
+        self._last_any: int | None = None
         self._formats: dict[str, object] = {}
         self._topics: dict[str, str] = {}
         for topic, fmt, _lt, _m, _at in self._records(None):
@@ -79,6 +81,12 @@ class DataflashSource(LogSource):
         if not self._topics:
             raise LogError(self.path, "not an ArduPilot DataFlash log: no record with a "
                                       "TimeUS column (a .bin log starts with FMT records)")
+        #: the log's end (ns): the latest TimeUS of a record of any topic, found by the scan
+        #: of the whole file when it was opened (whichever topics a pass reads). A clock
+        #: reading ``age()`` ticks to it, as on an MCAP to its summary's end
+        #: (:func:`fretc.signals.clock.silence_end`; issue 91: a GPS that died before the
+        #: end of the flight was never stale)
+        self.log_end: int | None = self._last_any
         self._begin_pass()  # the problems of the scan belong to the first pass
 
     def _reader(self):
@@ -134,6 +142,8 @@ class DataflashSource(LogSource):
                     topic = f"{fmt.name}/{k}"
             if self._first_any is None or prev_time < self._first_any:
                 self._first_any = prev_time  # (every record's: the log's start)
+            if self._last_any is None or prev_time > self._last_any:
+                self._last_any = prev_time  # (every record's: the log's end)
             if want is not None and topic not in want:
                 continue
             yield topic, fmt, int(m.TimeUS) * 1000, m, start

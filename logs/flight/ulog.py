@@ -163,7 +163,32 @@ class UlogSource(LogSource):
                  for t in _timestamps(d)[:1] if t != 0]
         self._start_time = min(times) if times else None
         self._end_time = None
+        #: the log's end (ns): the last log time of any message :meth:`messages` delivers
+        #: reading every topic (the uORB topics, ``Log``, ``Parameter``), known once the file
+        #: is open, whichever topics a pass reads; None for a log of no message. A clock
+        #: reading ``age()`` ticks to it, as on an MCAP to its summary's end
+        #: (:func:`fretc.signals.clock.silence_end`; issue 91: a GPS that died before the
+        #: end of the flight was never stale)
+        self.log_end: int | None = self._last_time()
         self._opened = (self._start_time, self._open_problems)
+
+    def _last_time(self) -> int | None:
+        """The last log time (ns) of a message of any topic (:attr:`log_end`): each topic's
+        timestamps kept as :meth:`messages` keeps them (:func:`_stamped`)."""
+        last = None
+        for k, u in enumerate(self._ulogs):
+            streams = [(_timestamps(d).astype(np.int64) * 1000, True) for d in u.data_list]
+            if u.logged_messages or getattr(u, "logged_messages_tagged", None):
+                streams.append((_log_stream(u)[1], False))
+            if u.changed_parameters:
+                streams.append((np.maximum(_parameter_stream(u)[1], self._run_floor(k)),
+                                False))
+            for t, sampled in streams:
+                kept = t[_stamped(t, self.log_start, sampled)]
+                if len(kept):
+                    end = int(kept.max())
+                    last = end if last is None else max(last, end)
+        return last
 
     def _run_floor(self, k: int) -> int:
         """The earliest log time (ns) of run ``k`` (after damage: the damage's end)."""
