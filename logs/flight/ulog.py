@@ -8,6 +8,16 @@ Topics, named as Foxglove names them when it opens a ``.ulg``:
   gyros): instance 0 keeps the plain name and instance *k* > 0 is ``NAME/k``
   (``battery_status/1``), so instances are never interleaved on one topic (Foxglove shows
   them merged under one name);
+* ``NAME/*``: every instance of uORB message ``NAME`` on one topic, in log time, each
+  message with one field more, ``multi_id`` (``uint8``: ULog's ``multi_id`` of its
+  subscription, 0 for the plain topic's, *k* for ``NAME/k``'s; ULog's own word, as
+  ``instance`` is a field of some uORB messages, ``parameter_update``'s), its type
+  ``px4_msgs/msg/<CamelName>Instances``. So the instances of a topic are the entities of
+  one kind, the instance number the key of one value per message (docs/bindings.md, "One
+  message, one entity"; issue 91): ``[entities] gps = '"sensor_gps/*".multi_id'``, with
+  ``eph = '"sensor_gps/*"{multi_id==$gps}.eph'``, judges each GPS on its own messages. A
+  log of one instance has it too (one entity, instance 0); a uORB message with a field
+  ``multi_id`` of its own has none;
 * ``Log``: PX4's logged text messages (``mavlink_log``, ``PX4_INFO`` ...), with Foxglove's
   fields: ``level`` on the rosgraph_msgs/Log scale (``DEBUG`` 1, ``INFO`` 2, ``WARN`` 4,
   ``ERROR`` 8, ``FATAL`` 16, named constants of the topic) from ULog's syslog level, ``msg``
@@ -64,12 +74,17 @@ from fretc.logs.flight.ulog_fast import read_sound
 from fretc.logs.flight.ulog_framing import segment_bytes, ulog_framing
 
 __all__ = ["UlogSource", "LOG_TOPIC", "PARAMETER_TOPIC", "DROPOUT", "EARLY_TIMESTAMP",
-           "ulog_type_name", "ulog_definition"]
+           "ALL_INSTANCES", "INSTANCE_FIELD", "ulog_type_name", "ulog_definition"]
 
 #: PX4's logged text messages.
 LOG_TOPIC = "Log"
 #: Parameter changes during the flight.
 PARAMETER_TOPIC = "Parameter"
+#: The suffix of the topic of every instance of a uORB message (``sensor_gps/*``, module
+#: docstring), whose messages carry :data:`INSTANCE_FIELD`.
+ALL_INSTANCES = "/*"
+#: The field of a message of an :data:`ALL_INSTANCES` topic giving its instance (multi_id).
+INSTANCE_FIELD = "multi_id"
 #: A ULog dropout: the logger lost messages for ``end - start``.
 DROPOUT = "dropout"
 #: A message whose ``timestamp`` says nothing of when it was logged (0: never set; a row
@@ -144,6 +159,11 @@ class UlogSource(LogSource):
                 topic = d.name if d.multi_id == 0 else f"{d.name}/{d.multi_id}"
                 self._topics[topic] = ulog_type_name(d.name)
                 self._subs[topic] = (d.name, d.multi_id)
+                # every instance on one topic (module docstring); multi_id -1 stands for all
+                if all(f != INSTANCE_FIELD for _t, _n, f in self.formats[d.name].fields):
+                    self._topics[d.name + ALL_INSTANCES] = (ulog_type_name(d.name)
+                                                            + "Instances")
+                    self._subs[d.name + ALL_INSTANCES] = (d.name, -1)
             if u.logged_messages or u.logged_messages_tagged:
                 self._topics[LOG_TOPIC] = "rosgraph_msgs/msg/Log"
             if u.changed_parameters:
@@ -258,7 +278,12 @@ class UlogSource(LogSource):
             elif topic == PARAMETER_TOPIC:
                 out[topic] = (typ, _PARAMETER_DEFINITION)
             else:
-                out[topic] = (typ, ulog_definition(self.formats, self._subs[topic][0]))
+                name, multi = self._subs[topic]
+                text = ulog_definition(self.formats, name)
+                if multi < 0:  # (the instance field after the message's own, before its
+                    own, sep, rest = text.partition("=" * 80)  # nested types' sections)
+                    text = own + f"uint8 {INSTANCE_FIELD}\n" + sep + rest
+                out[topic] = (typ, text)
         return out
 
     def messages(self, topics: set[str] | frozenset[str] | None = None) -> Iterator[Message]:
@@ -290,6 +315,12 @@ class UlogSource(LogSource):
                     streams.append((topic, d.data["timestamp"].astype(np.int64) * 1000,
                                     _Rows(d.data, ulog.message_formats, d.name,
                                           field_tree(self._fields_for(topic)))))
+                every = d.name + ALL_INSTANCES
+                if every in want:  # (this instance's messages on the topic of them all)
+                    streams.append((every, d.data["timestamp"].astype(np.int64) * 1000,
+                                    _Rows(d.data, ulog.message_formats, d.name,
+                                          field_tree(self._fields_for(every)),
+                                          instance=int(d.multi_id))))
             if LOG_TOPIC in want:
                 streams.append(_log_stream(ulog))
             if PARAMETER_TOPIC in want:  # a change before the run's first data: at its floor
@@ -354,14 +385,20 @@ class _Rows:
     of the fields the bindings read) only those fields."""
 
     def __init__(self, data: dict[str, np.ndarray], formats: dict, name: str,
-                 tree: dict | None = None) -> None:
+                 tree: dict | None = None, instance: int | None = None) -> None:
         self.data = data
         self.plan = _plan(formats, name, "", tree)
         self.stacked: dict[str, np.ndarray] = {}
         self.lists: dict[str, list] = {}  # a scalar column as Python values (``.item()``)
+        #: the instance (multi_id) each row carries as :data:`INSTANCE_FIELD` (None: none,
+        #: a topic of one instance)
+        self.instance = instance
 
     def row(self, i: int) -> Any:
-        return self._build(self.plan, i)
+        out = self._build(self.plan, i)
+        if self.instance is not None:
+            setattr(out, INSTANCE_FIELD, self.instance)
+        return out
 
     def _build(self, plan, i: int) -> Any:
         out = SimpleNamespace()
