@@ -77,6 +77,25 @@ def proposals_of(bindings_file: str | Path | None) -> dict[str, str]:
     return dict(table)
 
 
+def originates_of(bindings_file: str | Path | None) -> list[str]:
+    """The ``[shield] originates`` list of a binding file: the topics the shield publishes
+    that no controller proposes on (the Safety System's own stop request), each tick
+    proposing the topic's default message (``shield-replay`` names them; empty when the file
+    has none).
+
+    Raises:
+        ShieldError: not a list of topic names."""
+    if bindings_file is None:
+        return []
+    doc = tomllib.loads(Path(bindings_file).read_text(encoding="utf-8"))
+    listed = doc.get("shield", {}).get("originates", [])
+    if not isinstance(listed, list) or not all(
+            isinstance(t, str) and t.startswith("/") for t in listed):
+        raise ShieldError(f"{bindings_file}: [shield] originates must list topic names, e.g. "
+                          "[\"/gwendolen_control\"]")
+    return list(listed)
+
+
 class MessageShield:
     """A shield (``runtime``) between messages (module docstring): ``bindings`` of its
     variables, ``proposals`` corrected topic -> proposal topic, ``make`` topic -> a new

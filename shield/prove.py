@@ -19,7 +19,7 @@ With assumptions of the environment (``fretc shield --assume``, :mod:`fretc.shie
 requirement is proved **under** them: the product is with ``A1 & ... & An & !R`` (each
 assumption's ft_inf), so only the runs of an environment that keeps every assumption count,
 and the report says so. A proof under assumptions is only worth the runs it covers, so two
-answers are never "holds" (issue 90: ``A1: environment shall always satisfy a & !a`` was
+answers are never "holds" (a hostile finding: ``A1: environment shall always satisfy a & !a`` was
 "proved" without a word):
 
 * **vacuous** (every requirement of the machine): no run of the closed loop keeps the

@@ -56,7 +56,8 @@ from pathlib import Path
 from typing import Any
 
 from fretc.common.errors import FretcError
-from fretc.shield.messages import MessageShield, ShieldInputError, default_message, proposals_of
+from fretc.shield.messages import (MessageShield, ShieldInputError, default_message,
+                                   originates_of, proposals_of)
 from fretc.shield.replay_records import (Channel, Record, RecordedLog, recorded_topic,
                                          write_shielded)
 from fretc.signals.bindings.spec import Bindings, grid_end, grid_start
@@ -180,6 +181,8 @@ class ReplayResult:
     broken: dict[str, int] = field(default_factory=dict)
     published: dict[str, int] = field(default_factory=dict)
     renamed: dict[str, str] = field(default_factory=dict)
+    #: output topics taken as their own proposals (:func:`_proposals`)
+    own_proposals: list[str] = field(default_factory=list)
     written_counts: dict[str, int] = field(default_factory=dict)
     problems: list[str] = field(default_factory=list)
     damage: dict[str, Any] | None = None
@@ -196,6 +199,7 @@ class ReplayResult:
                 "nothing_published": self.silent.as_json(),
                 "assumptions_broken": dict(self.broken),
                 "published": dict(self.published), "recorded_kept_as": dict(self.renamed),
+                "own_proposals": list(self.own_proposals),
                 "written": dict(self.written_counts), "log_problems": list(self.problems),
                 "damage": None if self.damage is None else dict(self.damage)}
 
@@ -266,6 +270,47 @@ class _Outputs:
             raise ReplayError(f"{topic} at log time {t} ns: the shield's message cannot be "
                               f"written as {name} ({type(exc).__name__}: {exc})") from None
         return Record(t, t, ch, data, sequence)
+
+
+def _proposals(folder: ShieldFolder, bindings: Bindings, source: Any, log: str
+               ) -> tuple[dict[str, str], list[str]]:
+    """The proposal topic of each topic the shield publishes on: ``[shield] proposals`` of
+    the binding file; an output topic it does not name whose messages the recording holds
+    is its own proposal (the outputs bound to what the robot recorded: the recorded command
+    is what the controller proposed), listed second and said by the replay; a topic
+    ``[shield] originates`` names (one no controller proposes on: the shield's own stop
+    request) proposes its default message, as the shield's ROS 2 node does. A hostile finding: a
+    replay proposed the default message at every tick where the table was left out, and
+    reported "0 overridden" and an all-satisfied audit over a run that needed 569 overrides.
+
+    Raises:
+        ReplayError: an output topic with none of these (named, with the tables to give)."""
+    proposals = proposals_of(folder.bindings_file)
+    originates = set(originates_of(folder.bindings_file))
+    runtime = folder.shield_class()
+    topics = list(dict.fromkeys(t for m in runtime.machines for g in m.groups
+                                for t in g["topics"]))
+    recorded = set(source.topics())
+    own: list[str] = []
+    missing: list[str] = []
+    for topic in topics:
+        if topic in proposals or topic in originates:
+            continue
+        if topic in recorded:
+            proposals[topic] = topic
+            own.append(topic)
+        else:
+            missing.append(topic)
+    if missing:
+        raise ReplayError(
+            f"{log}: no proposal for {', '.join(missing)}: the recording holds no message of "
+            f"{'it' if len(missing) == 1 else 'them'} and {folder.bindings_file} names no "
+            "proposal topic in [shield] proposals (e.g. [shield] proposals = { "
+            f"\"{missing[0]}\" = \"/cmd_vel\" }}: the topic the controller proposes on), "
+            "nor the topic in [shield] originates (a topic the shield alone publishes, e.g. "
+            f"originates = [\"{missing[0]}\"]: its default message proposed); a replay never "
+            "proposes a default message unasked")
+    return proposals, own
 
 
 def _needed(folder: ShieldFolder, bindings: Bindings, shield: MessageShield,
@@ -477,11 +522,12 @@ def _replay_span(folder: ShieldFolder, bindings: Bindings, source: Any, recorded
                  gaps: list[Any]) -> ReplayResult:
     """One replay over ``source``'s messages before ``until`` (ns; None: all), written to
     ``out`` with ``gaps`` (:func:`replay_log`)."""
-    shield = MessageShield(folder.shield_class(), bindings, proposals_of(folder.bindings_file),
+    proposals, own = _proposals(folder, bindings, source, log)
+    shield = MessageShield(folder.shield_class(), bindings, proposals,
                            lambda topic: outputs.make(topic))
     needed, types = _needed(folder, bindings, shield, source, log)
     outputs = _Outputs(bindings, types, str(folder.bindings_file))
-    result = ReplayResult(log=log, written=os.fspath(out))
+    result = ReplayResult(log=log, written=os.fspath(out), own_proposals=own)
     on_log = set(source.topics())
     result.renamed = {t: recorded_topic(t) for t in sorted(set(types) & on_log)}
     taken = sorted(t for t in result.renamed.values() if t in on_log)

@@ -154,7 +154,7 @@ def test_safe_ros_r5_is_enforced_and_proved_under_the_shipped_assumptions(tmp_pa
 
 
 def _ab(tmp_path: Path, assumption: str):
-    """Issue 90's set: ``R1: always p``, ``R2: whenever a immediately o``, under one
+    """The Safety System round's set: ``R1: always p``, ``R2: whenever a immediately o``, under one
     assumption of the environment: (compiled requirements, assumption, shield)."""
     (tmp_path / "r.fret").write_text("R1: ctrl shall always satisfy p\n"
                                      "R2: whenever a ctrl shall immediately satisfy o\n")
@@ -166,7 +166,7 @@ def _ab(tmp_path: Path, assumption: str):
 
 
 def test_a_broken_assumption_never_turns_the_shield_against_a_correct_controller(tmp_path):
-    """Issue 90: under ``A5: environment shall always satisfy !a`` the fallback was ``p,
+    """The Safety System round: under ``A5: environment shall always satisfy !a`` the fallback was ``p,
     !o`` (robust only while A5 holds), and once ``a`` came the shield overrode a correct
     controller with ``o = false`` at every tick (R2 failed 101 of 200 ticks). The fallback
     now keeps the requirements without the assumptions: R2 kept after A5 breaks."""
@@ -189,7 +189,7 @@ def test_a_broken_assumption_never_turns_the_shield_against_a_correct_controller
      "no run of the closed loop keeps the assumptions A1: nothing is proved")])
 def test_prove_never_calls_an_impossible_or_vacuous_assumption_proved(tmp_path, assumption,
                                                                       why):
-    """Issue 90: an assumption no run can keep (A1) was "proved" without a word, and one that
+    """The Safety System round: an assumption no run can keep (A1) was "proved" without a word, and one that
     makes R2 vacuous (A5) "proved" R2: both are "vacuous" with the reason, NOT PROVED."""
     compiled, assumed, shield = _ab(tmp_path, assumption)
     proof = prove_shield(shield, [*compiled, *assumed])

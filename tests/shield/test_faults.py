@@ -6,7 +6,7 @@ Random requirement sets over the inputs ``a``, ``b`` (booleans), ``d`` (a number
 random ticks a value the shield cannot read: an input or a proposal that is NaN, infinite
 (a proposal), missing, of the wrong type, or an integer no double holds. Each faulty run is
 judged by brute force over the node table and by FRET's semantics, not against the
-fault-free run (issue 90: "an unreadable input is any value"):
+fault-free run ("an unreadable input is any value"):
 
 * a tick whose input cannot be read gives outputs that are safe (the node table's ``safe``)
   from every state the shield may be in with every valuation of the unread input's atoms
@@ -240,7 +240,7 @@ def test_the_issue_example_nan_at_f1s_deadline_moves_no_machine(tmp_path):
 
 
 def test_a_nan_in_another_requirements_input_loses_no_trigger(tmp_path):
-    """Issue 90's case: ``G1: upon a ctrl shall for 3 ticks satisfy o``, ``G2: whenever x >
+    """The Safety System round's case: ``G1: upon a ctrl shall for 3 ticks satisfy o``, ``G2: whenever x >
     2 ctrl shall immediately satisfy !p``; ``a = true, x = NaN`` at tick 0, proposals false.
     The tick was not counted, ``a``'s trigger lost and G1 violated at tick 1; every value of
     ``x`` is now decided for: G1's three ticks of ``o`` start at tick 0, and G2 holds
@@ -296,7 +296,7 @@ def test_the_c_form_is_all_or_nothing_as_the_python_form(text, run):
     :func:`judged`; the C runner gives the Python form's outputs, override, reasons and fault
     at every tick. (An unreadable *input* is any value in the Python form, which keeps a
     belief of states; the C form, of constant memory, still answers -1 with the fallback and
-    its state as it was: a trigger at that tick is lost there, an open item of issue 90, so
+    its state as it was: a trigger at that tick is lost there, an open item, so
     runs with input faults are not compared.)"""
     needs_cc()
     run = [(i, p, f) for i, p, f in run
@@ -401,7 +401,7 @@ def test_a_message_shield_whose_messages_fail_takes_no_step(tmp_path, monkeypatc
 
 
 def test_the_fallback_is_rest_where_its_atoms_allow_it(tmp_path):
-    """Issue 90: a shield whose output is bound to ``/cmd_vel.linear.x`` with ``R1: whenever
+    """The Safety System round: a shield whose output is bound to ``/cmd_vel.linear.x`` with ``R1: whenever
     too_close ctrl shall immediately satisfy cmd_linear < 0.01 & cmd_linear > -0.01``: its
     fallback commanded 0.009 m/s (the message the bindings solved for the valuation), not
     rest; rest (0) now, as the summary prints."""

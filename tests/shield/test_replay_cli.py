@@ -240,3 +240,33 @@ def test_the_recorded_run_violates_what_the_shielded_run_satisfies(shield_dir, t
     assert recorded["R2"] == recorded["R9"] == "violated"
     assert shielded["R2"] == shielded["R9"] == "satisfied"
     assert recorded["R5"] == shielded["R5"] == "violated"  # (the plant's: as recorded)
+
+
+def test_an_output_topic_the_recording_lacks_without_a_proposal_is_an_input_error(tmp_path):
+    """The Safety System round: an output topic without ``[shield] proposals`` or ``[shield] originates``
+    proposed the default message at every tick, silently. The shipped trace holds
+    ``/cmd_vel_filtered`` (the hand-written interceptor's): without the table it is its own
+    proposal, and said; a topic it does not hold is refused, naming it and the tables."""
+    import re
+
+    src = (REPO / "requirements" / "shield" / "safe_ros_shield.bindings.toml").read_text()
+    fret = [str(REPO / "requirements" / "safe_ros.fret"),
+            str(REPO / "requirements" / "shield" / "release.fret")]
+    io = ["--inputs", "too_close,scan_stale,clearance,obstacle_ahead,obstacle_behind",
+          "--outputs", "stopped,stop_requested,forwarded_zero,linear_speed,angular_speed,"
+          "linear_velocity"]
+    no_table = re.sub(r'\nproposals = \{[^}]*\}\n', "\n", src)
+    assert no_table != src
+    for name, text, code, said in (
+            ("own", no_table, (0, 1), "proposals of /cmd_vel_filtered: its recorded messages"),
+            ("none", no_table.replace("/cmd_vel_filtered", "/cmd_vel_safe"), (2,),
+             "no proposal for /cmd_vel_safe")):
+        folder = tmp_path / name
+        folder.mkdir()
+        (folder / "b.toml").write_text(text)
+        got = run("shield", *fret, "-b", str(folder / "b.toml"), *io, "--emit", "python",
+                  "-o", str(folder / "shield"))
+        assert got.exit_code == 0, got.output
+        got = run("shield-replay", str(folder / "shield"), str(TRACE), "-o",
+                  str(folder / "out"))
+        assert got.exit_code in code and said in got.output.replace("\n", " "), got.output

@@ -55,6 +55,7 @@ linear_velocity = "{topic}.linear.x"
 BINDINGS = ("[tick]\nperiod = \"100 ms\"\ntime = \"log\"\n\n[variables]\n" + INPUTS
             + outputs_on("/cmd_vel_filtered", "/stop_request")
             + "\n[shield]\nproposals = { \"/cmd_vel_filtered\" = \"/cmd_vel\" }\n"
+            "originates = [\"/stop_request\"]\n"
             "types = { \"/stop_request\" = \"std_msgs/msg/Bool\" }\n")
 
 
@@ -271,3 +272,45 @@ def test_the_shielded_run_audits_satisfied_where_the_recorded_run_is_violated(re
     verdicts = {v["requirement"]: v["verdict"]
                 for v in json.loads((tmp_path / "a.json").read_text())["logs"][0]["verdicts"]}
     assert verdicts == {"R2": "violated", "R4": "violated", "R9": "violated"}
+
+
+def test_a_replay_without_proposals_is_never_a_silent_all_clear(tmp_path):
+    """Hostile round 9: bindings as a user writes them, the outputs bound to the recorded
+    ``/cmd_vel`` and no ``[shield] proposals``: the replay proposed the default Twist at
+    every tick, published zeros, reported "0 overridden", an all-satisfied audit and exit
+    0 (569 overridden ticks with the table). The recorded ``/cmd_vel`` is now its own
+    proposal, and said; an output topic the recording does not hold and no table names is
+    an input error naming it and the tables."""
+    from _shared import PRESENT, REASON, SHARED
+
+    if not PRESENT:
+        pytest.skip(REASON)
+    bag = SHARED / BAG
+    (tmp_path / "tb3.fret").write_text(REQUIREMENTS)
+    for name, stop, table, want in (
+            ("own", "/stop_request", 'originates = ["/stop_request"]\n', 0),
+            ("none", "/stop_request", "", 2)):
+        folder = tmp_path / name
+        folder.mkdir()
+        (folder / "b.toml").write_text(
+            "[tick]\nperiod = \"100 ms\"\ntime = \"log\"\n\n[variables]\n" + INPUTS
+            + outputs_on("/cmd_vel", stop) + "\n[shield]\n" + table
+            + "types = { \"/stop_request\" = \"std_msgs/msg/Bool\" }\n")
+        got = CliRunner().invoke(main, ["shield", str(tmp_path / "tb3.fret"), "-b",
+                                        str(folder / "b.toml"), "--emit", "python", "-o",
+                                        str(folder / "shield")])
+        assert got.exit_code == 0, got.output
+        got = CliRunner().invoke(main, ["shield-replay", str(folder / "shield"), str(bag),
+                                        "-o", str(folder / "out"), "--json",
+                                        str(folder / "r.json")])
+        if want == 2:
+            assert got.exit_code == 2, got.output
+            assert "no proposal for /stop_request" in got.output
+            assert "[shield] proposals" in got.output and "[shield] originates" in got.output
+            assert not (folder / "out").exists() or not any((folder / "out").iterdir())
+            continue
+        assert got.exit_code in (0, 1), got.output
+        doc = json.loads((folder / "r.json").read_text())["runs"][0]
+        assert doc["own_proposals"] == ["/cmd_vel"], doc["own_proposals"]
+        assert "proposals of /cmd_vel: its recorded messages" in got.output
+        assert doc["overridden"]["ticks"] > 100, doc["overridden"]

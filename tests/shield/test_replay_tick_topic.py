@@ -34,6 +34,7 @@ scan_stale = "age(/scan) > 0.3"
 BINDINGS = ("[tick]\ntopic = \"/cmd_vel\"\nnominal_rate = \"10 Hz\"\ntime = \"log\"\n\n"
             "[variables]\n" + INPUTS + outputs_on("/cmd_vel_filtered", "/stop_request")
             + "\n[shield]\nproposals = { \"/cmd_vel_filtered\" = \"/cmd_vel\" }\n"
+            "originates = [\"/stop_request\"]\n"
             "types = { \"/stop_request\" = \"std_msgs/msg/Bool\" }\n")
 
 

@@ -140,6 +140,9 @@ def _overrides_text(r: Any) -> str:
     for a, t in r.broken.items():
         lines.append(f"  assumption {a} of the environment broken at {_time(t, s)}: the "
                      "shield's guarantee no longer holds from there")
+    for topic in getattr(r, "own_proposals", ()):
+        lines.append(f"  proposals of {topic}: its recorded messages ([shield] proposals "
+                     "names none for it)")
     for topic, kept in r.renamed.items():
         lines.append(f"  recorded {topic} kept as {kept} (the shield publishes {topic})")
     if r.damage is not None:
