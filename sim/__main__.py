@@ -7,6 +7,7 @@ from pathlib import Path
 
 import click
 
+from fretc.sim.faults import FAULT_KINDS, faults_from_options
 from fretc.sim.logs import REQUIREMENTS, counts, expected_verdicts, read_log
 from fretc.sim.run import record as do_record
 from fretc.sim.scenarios import SCENARIOS
@@ -43,14 +44,32 @@ def list_scenarios() -> None:
 @click.option("--safety", default="sif", show_default=True, metavar="sif|shield:DIR",
               help="The Safety System: the hand-written SIF and cmd_vel_interceptor, or the "
               "shield fretc shield --emit python -b BINDINGS wrote into DIR.")
+@click.option("--fault", "fault_kinds", multiple=True, type=click.Choice(list(FAULT_KINDS)),
+              help="Inject this fault (repeatable; docs/guide/simulator.md): a silent, "
+              "invalid (all or a sector NaN), frozen or stale-stamped LiDAR, spurious near "
+              "returns, the controller's NaN/inf/huge /cmd_vel, the Safety System's restart.")
+@click.option("--fault-start", "fault_starts", multiple=True, type=float, metavar="S",
+              help="Sim time [s] each fault starts (once for all, or once per --fault).")
+@click.option("--fault-duration", "fault_durations", multiple=True, type=float, metavar="S",
+              help="How long [s] each fault lasts (once for all, or once per --fault).")
+@click.option("--fault-sector", "fault_sectors", multiple=True, metavar="LO:HI",
+              help="The beams' sector [degrees, REP 103: 0 ahead, counter-clockwise] of "
+              "sector_nan (required) and near_returns (default: the whole scan).")
 def record(scenario: str, seed: int, output: str, ros1: bool, png: str | None, threshold: float,
-           stop_delay: float | None, compression: str, safety: str) -> None:
+           stop_delay: float | None, compression: str, safety: str,
+           fault_kinds: tuple[str, ...], fault_starts: tuple[float, ...],
+           fault_durations: tuple[float, ...], fault_sectors: tuple[str, ...]) -> None:
     """Record one scenario to an MCAP file."""
+    try:
+        faults = faults_from_options(fault_kinds, fault_starts, fault_durations,
+                                     fault_sectors)
+    except ValueError as exc:
+        raise click.BadParameter(str(exc), param_hint="--fault") from None
     t0 = time.perf_counter()
     try:
         res = do_record(scenario, seed=seed, output=output, ros1=ros1, png=png,
                         threshold=threshold, stop_delay=stop_delay, compression=compression,
-                        safety=safety)
+                        safety=safety, faults=faults)
     except ValueError as exc:
         raise click.BadParameter(str(exc), param_hint="--safety") from None
     wall = time.perf_counter() - t0
@@ -58,6 +77,10 @@ def record(scenario: str, seed: int, output: str, ros1: bool, png: str | None, t
     clr = ("<= 0 (contact)" if res.min_clearance <= 0 else f"{res.min_clearance:.3f} m")
     click.echo(f"{output}: {scenario} seed {seed}: {res.outcome}; {res.duration:.2f} s sim "
                f"in {wall:.1f} s wall; reached: {reached or 'none'}; min clearance {clr}")
+    for flt in faults:
+        click.echo(f"  fault {flt.kind}: {flt.start:g} s for {flt.duration:g} s"
+                   + (f", sector {flt.sector[0]:g}:{flt.sector[1]:g} degrees"
+                      if flt.sector is not None else ""))
     if safety != "sif":
         why: dict[str, int] = {}
         for _t, reasons, _changed in res.overrides:

@@ -265,6 +265,12 @@ class McapRecorder:
                                 publish_time=int(log_time_ns), sequence=self.counts[topic])
         self.counts[topic] += 1
 
+    def metadata(self, name: str, data: dict[str, str]) -> None:
+        """Add an MCAP Metadata record ``name`` with the string map ``data`` (MCAP spec:
+        Metadata, name and key/value strings), where the run describes its fault injections
+        (:mod:`fretc.sim.simulation`)."""
+        self.writer.add_metadata(name, dict(data))
+
     def finish(self) -> None:
         """Write the summary and footer."""
         self.writer.finish()

@@ -72,8 +72,17 @@ class ScoutMini:
         self.state = BaseState(x, y, yaw)
 
     def step(self, cmd_v: float, cmd_w: float, dt: float) -> None:
-        """Advance by ``dt`` s towards the commanded twist ``cmd_v`` m/s, ``cmd_w`` rad/s."""
+        """Advance by ``dt`` s towards the commanded twist ``cmd_v`` m/s, ``cmd_w`` rad/s.
+
+        A command beyond the speed limits (``+inf``, ``1e6``: the controller's faults of
+        :mod:`fretc.sim.faults`) saturates at them; a NaN component, which no limit
+        saturates, is ignored: the base keeps its current speed in it (a motor controller
+        rejecting a malformed set-point keeps its last one)."""
         p, s = self.p, self.state
+        if cmd_v != cmd_v:  # NaN
+            cmd_v = s.v
+        if cmd_w != cmd_w:
+            cmd_w = s.w
         cmd_v = min(max(cmd_v, -p.max_v), p.max_v)
         cmd_w = min(max(cmd_w, -p.max_w), p.max_w)
         s.v += min(max(cmd_v - s.v, -p.acc_v * dt), p.acc_v * dt)

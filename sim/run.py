@@ -3,10 +3,12 @@
 from __future__ import annotations
 
 import io
+from dataclasses import replace
 from pathlib import Path
 from typing import Any, BinaryIO, cast
 
 from fretc.common.outputs import create_output, output_folder
+from fretc.sim.faults import Fault
 from fretc.sim.recording import McapRecorder
 from fretc.sim.scenarios import Scenario, get_scenario
 from fretc.sim.simulation import RunResult, Simulation
@@ -15,18 +17,22 @@ from fretc.sim.simulation import RunResult, Simulation
 def record(scenario: str, seed: int = 1, output: str | Path | io.BufferedIOBase | None = None,
            ros1: bool = False, png: str | Path | None = None, threshold: float = 0.9,
            stop_delay: float | None = None, compression: str = "zstd",
-           safety: str | None = None) -> RunResult:
+           safety: str | None = None, faults: tuple[Fault, ...] = ()) -> RunResult:
     """Simulate ``scenario`` with ``seed`` and write the run to ``output`` (a path or a binary
     stream; ``None`` discards it), as ROS 2 (CDR) or, with ``ros1``, ROS 1 messages; draw it to
     ``png`` if given. ``threshold`` m is the SIF threshold, ``stop_delay`` s overrides the
     ``stop_delay`` scenario's delay; ``safety`` ``"shield:DIR"`` puts the shield generated in DIR
-    in place of the hand-written SIF and interceptor (:mod:`fretc.sim.shielded`). Returns the
+    in place of the hand-written SIF and interceptor (:mod:`fretc.sim.shielded`); ``faults``
+    are injected besides the scenario's own (:class:`fretc.sim.faults.Fault`). Returns the
     :class:`~fretc.sim.simulation.RunResult`.
 
     Raises ``KeyError`` for an unknown scenario, ``ValueError`` for bad parameters (a
     ``safety`` that names no shield folder) and ``OSError`` if the output cannot be written.
     """
-    result = record_scenario(get_scenario(scenario, stop_delay), seed, output, ros1=ros1,
+    sc = get_scenario(scenario, stop_delay)
+    if faults:
+        sc = replace(sc, faults=sc.faults + tuple(faults))
+    result = record_scenario(sc, seed, output, ros1=ros1,
                              threshold=threshold, compression=compression,
                              shield=shield_of(safety))
     if png is not None:

@@ -31,6 +31,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, replace
 
+from fretc.sim.faults import Fault
 from fretc.sim.world import Barrel, MovingObstacle, RemovedObject
 
 #: The mapped drum at (4.80, -3.55), 0.30 m across (measured on the map), and its twin.
@@ -58,6 +59,13 @@ class Scenario:
     ``lidar_sigma`` m: the LiDAR's range noise (None: :class:`fretc.sim.robot.LidarParams`'
     default); ``max_time`` s: the mission's time limit (None: :class:`fretc.sim.simulation.SimParams`'
     default). The defaults leave the shipped scenarios as recorded.
+
+    ``faults``: further fault injections, each from its start for its duration
+    (:class:`fretc.sim.faults.Fault`: a silent, invalid, frozen or stale LiDAR, spurious near
+    returns, the controller's non-finite or huge proposals, the Safety System's restart);
+    a scenario with faults writes them into its recording's metadata (``fretc.sim.faults``).
+    A dropout (``dropout_start``) is the ``silence`` fault, kept as its own fields so that
+    the shipped ``lidar_dropout`` recording stays as recorded.
     """
 
     name: str
@@ -74,6 +82,7 @@ class Scenario:
     interceptor_delay: float = 0.0
     lidar_sigma: float | None = None
     max_time: float | None = None
+    faults: tuple[Fault, ...] = ()
 
 
 SCENARIOS: dict[str, Scenario] = {s.name: s for s in (

@@ -71,6 +71,16 @@ class ShieldedSafety:
 
         self.shield = MessageShield(self.runtime, self.bindings, self.proposals, make)
 
+    def restart(self) -> None:
+        """The shield's node came back after a crash (the ``safety_restart`` fault of
+        :mod:`fretc.sim.faults`): its state reset to the initial one and every message it
+        held forgotten, as a node that starts again; its overrides, ticks and broken
+        assumptions so far are kept (they are the run's)."""
+        assert self.factory is not None and self.shield is not None
+        kept = (self.overrides, self.ticks, self.broken)
+        self.start(self.factory)
+        self.overrides, self.ticks, self.broken = kept
+
     def hear(self, topic: str, message: Any, log_time_ns: int) -> None:
         """A message the robot published (inputs, and the SRAS's proposals)."""
         assert self.shield is not None

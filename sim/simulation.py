@@ -17,6 +17,16 @@ step the order is fixed:
 Randomness comes from one ``numpy.random.Generator`` per noise source, spawned from
 ``SeedSequence(seed)``: same seed, same run, byte-identical MCAP.
 
+Fault injections (:mod:`fretc.sim.faults`, the scenario's ``faults``): a silent LiDAR drops
+step 4's ``/scan`` and ``/tf`` as the dropout does; the other scan faults change the published
+``/scan`` (which the SIF, the shield and the controller all read) while the LiDAR keeps
+measuring; the controller's faults change the ``linear.x`` of step 5's ``/cmd_vel``; the Safety
+System's restart takes the SIF agent (or the generated shield) down at the first step in its
+window and brings it back, in its initial state, at the first step after it (before steps 2-5
+of that step). A scenario with faults writes them into the recording's metadata (``fretc.sim.faults``:
+``scenario``, ``seed`` and ``faults``, a JSON list of :meth:`fretc.sim.faults.Fault.describe`)
+before its first message; a scenario without any writes no metadata (the shipped recordings).
+
 Run end: the mission ends home or is aborted (no progress for ``stuck_timeout`` s, or the
 mission time limit); the SRAS then publishes a final zero ``/cmd_vel`` and the run goes on for
 ``final_linger`` s with the robot stopped. A contact (ground-truth clearance <= 0) is a mission
@@ -26,6 +36,7 @@ ends ``contact_linger`` s later with the SRAS still commanding motion.
 
 from __future__ import annotations
 
+import json
 import math
 from collections import deque
 from dataclasses import dataclass, field, replace
@@ -35,6 +46,7 @@ import numpy as np
 
 from fretc.sim.navigation import (INSPECTION_POINTS, ControllerParams, GlobalPlanner, LocalController,
                          Mission, PlannerParams)
+from fretc.sim.faults import CMD_VALUES, SCAN_KINDS, Fault, fault_rng, in_sector
 from fretc.sim.recording import Recorder
 from fretc.sim.robot import (Lidar, LidarParams, OdometryNoise, ScoutMini, ScoutMiniParams,
                     WheelOdometry, min_valid_range, wrap_angle)
@@ -133,6 +145,14 @@ class _RunState:
     dwell_until: int | None = None
     goal_active: bool = False
     min_clear: float = math.inf
+    #: the silent LiDAR's windows (ms): the dropout's and the ``silence`` faults'
+    silent: list[tuple[int, int]] = field(default_factory=list)
+    #: the ranges of the last scan published without a scan fault (``frozen`` republishes them)
+    last_good: np.ndarray | None = None
+    #: per ``stale_stamp`` fault (its place in the scenario's list): the held header stamp (ns)
+    stale: dict[int, int] = field(default_factory=dict)
+    #: the Safety System's node is down (a ``safety_restart`` fault's window)
+    safety_down: bool = False
 
 
 class Simulation:
@@ -180,6 +200,10 @@ class Simulation:
         self.mission = Mission(INSPECTION_POINTS, (hx, hy), dwell=sim.dwell)
         #: a generated shield in place of the SIF and the interceptor (sim.shielded), or None
         self.shield = shield
+        #: the scenario's fault injections (sim.faults); each near_returns fault's generator
+        self.faults: tuple[Fault, ...] = tuple(scenario.faults)
+        self._fault_rngs = {k: fault_rng(self.seed, k) for k, f in enumerate(self.faults)
+                            if f.kind == "near_returns"}
 
     # ------------------------------------------------------------------ helpers
     def _loc_estimate(self):
@@ -215,6 +239,12 @@ class Simulation:
         if sc.dropout_start is not None:
             st.drop = (int(round(sc.dropout_start * 1000)),
                        int(round((sc.dropout_start + sc.dropout_duration) * 1000)))
+        st.silent = ([st.drop] if st.drop else []) + [
+            flt.window_ms for flt in self.faults if flt.kind == "silence"]
+        if self.faults and hasattr(rec, "metadata"):  # (a live server has no such place)
+            rec.metadata("fretc.sim.faults", {
+                "scenario": sc.name, "seed": str(self.seed),
+                "faults": json.dumps([flt.describe() for flt in self.faults])})
         # start-up: the map (latched) and the agent's initial decision
         f, m = rec.factory, self.omap
         rec.write("/map", _ns(0), f.occupancy_grid(_ns(0), m.resolution, m.width, m.height,
@@ -229,6 +259,8 @@ class Simulation:
             s = self.base.state
             if t_ms > 0:  # 1. physics
                 self._physics(st, t_ms, t, s)
+            if self.faults:  # the Safety System's node going down or coming back
+                self._restart(rec, st, t_ms)
             # 2. delayed decisions
             while st.pending and st.pending[0][0] <= t_ms:
                 self._publish_control(rec, st, t_ms, st.pending.popleft()[1])
@@ -236,9 +268,9 @@ class Simulation:
                 self._intercept_control(rec, st, t_ms, st.interceptor_pending.popleft()[1])
             if t_ms % 50 == 0 or (st.contact is not None and st.contact[0] == t):
                 self._sample_20hz(rec, st, t_ms, t, s)
-            if t_ms % 100 == 0 and not (st.drop and st.drop[0] <= t_ms < st.drop[1]):
+            if t_ms % 100 == 0 and not any(a <= t_ms < b for a, b in st.silent):
                 self._scan_10hz(rec, st, t_ms, t, s)
-            if t_ms % 100 == 0 and self.shield is not None:
+            if t_ms % 100 == 0 and self.shield is not None and not st.safety_down:
                 self._shield_tick(rec, st, t_ms)
             if t_ms % 100 == 50:
                 self._publish_cmd(rec, st, t_ms, *self._sras(rec, st, t_ms, t, s))
@@ -255,6 +287,27 @@ class Simulation:
             overrides=list(self.shield.overrides) if self.shield is not None else [],
             shield_ticks=self.shield.ticks if self.shield is not None else 0,
             shield_broken=list(self.shield.broken) if self.shield is not None else [])
+
+    def _restart(self, rec: Recorder, st: _RunState, t_ms: int) -> None:
+        """A ``safety_restart`` fault (:mod:`fretc.sim.faults`): at the first step in its
+        window the Safety System's node goes down (the SIF agent's pending decisions are lost;
+        the shield hears and publishes nothing); at the first step after it the node comes
+        back in its initial state: the shield reset, or a fresh SIF agent publishing its
+        start-up ``false``."""
+        down = any(flt.kind == "safety_restart" and flt.active(t_ms) for flt in self.faults)
+        if down == st.safety_down:
+            return
+        st.safety_down = down
+        if down:
+            st.pending.clear()
+            return
+        if self.shield is not None:
+            self.shield.restart()
+            return
+        events = self.safety.events
+        self.safety = SafetyAgent(self.safety.p)
+        self.safety.events = events
+        self._publish_control(rec, st, t_ms, False)
 
     def _publish_control(self, rec: Recorder, st: _RunState, t_ms: int, stop) -> None:
         rec.write("/gwendolen_control", _ns(t_ms), rec.factory.bool(stop))
@@ -280,10 +333,14 @@ class Simulation:
 
     def _publish_cmd(self, rec: Recorder, st: _RunState, t_ms: int, v: float,
                      w: float) -> None:
+        for flt in self.faults:  # the controller's faults: its proposal's linear.x
+            if flt.kind in CMD_VALUES and flt.active(t_ms):
+                v = CMD_VALUES[flt.kind]
         msg = rec.factory.twist(v, w)
         rec.write("/cmd_vel", _ns(t_ms), msg)
         if self.shield is not None:  # the proposal: the shield decides at its next tick
-            self.shield.hear("/cmd_vel", msg, _ns(t_ms))
+            if not st.safety_down:
+                self.shield.hear("/cmd_vel", msg, _ns(t_ms))
             return
         self._publish_filtered(rec, st, t_ms, *self.interceptor.on_cmd_vel(v, w))
 
@@ -334,7 +391,8 @@ class Simulation:
                   f.pose_stamped(_ns(t_ms), "map", s.x, s.y, s.yaw, "/ground_truth/pose"))
         clearance = f.float64(clr)
         rec.write("/ground_truth/clearance", _ns(t_ms), clearance)
-        if self.shield is not None:  # (a shield whose assumptions read the ground truth)
+        if self.shield is not None and not st.safety_down:  # (a shield whose assumptions
+            # read the ground truth)
             self.shield.hear("/ground_truth/clearance", clearance, _ns(t_ms))
         trace.t.append(t)
         trace.x.append(s.x)
@@ -349,11 +407,18 @@ class Simulation:
         hears the scan and there is no SIF."""
         f, lid = rec.factory, self.lidar.p
         ranges = self.lidar.scan(self.world, s.x, s.y, s.yaw, t)
-        scan = f.laser_scan(_ns(t_ms), "base_link", lid.angle_min, lid.angle_max,
+        stamp_ns = _ns(t_ms)
+        faulty = [(k, flt) for k, flt in enumerate(self.faults)
+                  if flt.kind in SCAN_KINDS and flt.active(t_ms)]
+        if not faulty:
+            st.last_good = ranges
+        for k, flt in faulty:
+            ranges, stamp_ns = self._scan_fault(st, k, flt, ranges, t_ms, stamp_ns)
+        scan = f.laser_scan(stamp_ns, "base_link", lid.angle_min, lid.angle_max,
                             lid.angle_increment, lid.scan_time, lid.range_min, lid.range_max,
                             ranges)
         rec.write("/scan", _ns(t_ms), scan)
-        if self.shield is not None:
+        if self.shield is not None and not st.safety_down:
             self.shield.hear("/scan", scan, _ns(t_ms))
         self.map_odom = self._loc_estimate()
         rec.write("/tf", _ns(t_ms), f.tf([f.transform(_ns(t_ms), "map", "odom",
@@ -361,7 +426,8 @@ class Simulation:
         st.last_min = min_valid_range(ranges, lid.range_min, lid.range_max)
         st.trace.scan_t.append(t)
         st.trace.scan_min.append(st.last_min)
-        if self.shield is not None:  # (the shield is the Safety System: no SIF beside it)
+        if self.shield is not None or st.safety_down:  # (the shield is the Safety System:
+            # no SIF beside it; a SIF agent that is down reads nothing)
             return
         decision = self.safety.on_scan(t, st.last_min, self.odom.v, self.odom.w)
         if decision is not None:
@@ -369,6 +435,36 @@ class Simulation:
                 st.pending.append((t_ms + st.delay_ms, decision))
             else:
                 self._publish_control(rec, st, t_ms, decision)
+
+    def _scan_fault(self, st: _RunState, k: int, flt: Fault, ranges: np.ndarray, t_ms: int,
+                    stamp_ns: int) -> tuple[np.ndarray, int]:
+        """The ranges (float32 ``(n_beams,)``, m) and header stamp (ns) the LiDAR driver
+        publishes under the ``k``-th fault ``flt`` (a kind of :data:`fretc.sim.faults.SCAN_KINDS`),
+        from the measured ``ranges`` and the scan's own stamp (REP 117: NaN is an invalid
+        measurement; beam angles ``angle_min + i * angle_increment``, REP 103)."""
+        lid = self.lidar.p
+        kind = flt.kind
+        if kind == "stale_stamp":
+            return ranges, st.stale.setdefault(k, stamp_ns)
+        if kind == "frozen":
+            if st.last_good is None:  # (no scan before the window: the first one is held)
+                st.last_good = ranges
+            return st.last_good.copy(), stamp_ns
+        out = ranges.copy()
+        if kind == "all_nan":
+            out[:] = np.nan
+        elif kind == "sector_nan":
+            assert flt.sector is not None
+            out[in_sector(lid.angle_min, lid.angle_increment, lid.n_beams, flt.sector)] = np.nan
+        else:  # near_returns
+            beams = (np.flatnonzero(in_sector(lid.angle_min, lid.angle_increment, lid.n_beams,
+                                              flt.sector))
+                     if flt.sector is not None else np.arange(lid.n_beams))
+            if beams.size:
+                pick = self._fault_rngs[k].choice(beams, min(flt.near_count, beams.size),
+                                                  replace=False)
+                out[pick] = np.float32(flt.near_range)
+        return out, stamp_ns
 
     def _command(self, st: _RunState, t: float) -> tuple[float, float]:
         ex, ey, eyaw = self._pose_estimate()

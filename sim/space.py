@@ -22,6 +22,19 @@ falsify`` searches its range), :mod:`fretc.sim.distributions`::
 The parameters (:data:`PARAMETERS`) and what a value does to the scenario are applied by
 :func:`apply`; a space whose base scenario lacks what a parameter changes (``obstacle_speed``
 without a moving obstacle) is refused when it is loaded.
+
+A fault of :mod:`fretc.sim.faults` is searched by its ``fault_start`` and ``fault_duration``
+(s), its kind ``fault_kind`` and, for the sector faults, ``fault_sector_low`` and
+``fault_sector_high`` (degrees, REP 103). The kind is a category: in the file a name (one
+kind for every run), a choice of names (``{dist = "choice", values = ["all_nan",
+"frozen"]}``, weights as any choice's) or a range of indices; as a value it is the kind's
+index in :data:`fretc.sim.faults.FAULT_KINDS` (``falsify.json``, ``estimate.json``), and the
+search's continuous coordinate is snapped to the nearest index the file allows
+(:meth:`Space.point`). A fault share (``fault = q``) goes on ``fault_start``::
+
+    fault_kind = {dist = "choice", values = ["all_nan", "sector_nan", "frozen"]}
+    fault_start = {dist = "uniform", low = 5.0, high = 30.0, fault = 0.1}
+    fault_duration = [0.5, 3.0]
 """
 
 from __future__ import annotations
@@ -37,6 +50,7 @@ from typing import NoReturn, TYPE_CHECKING
 from fretc.common.errors import FretcError, Where
 
 from fretc.sim.distributions import Distribution, DistributionError, parse_distribution
+from fretc.sim.faults import FAULT_KINDS, Fault
 from fretc.sim.scenarios import DRUM_RADIUS, SCENARIOS, Scenario
 from fretc.sim.simulation import STEP_MS
 from fretc.sim.world import Barrel
@@ -59,7 +73,21 @@ PARAMETERS: dict[str, tuple[str, str]] = {
     "obstacle_speed": ("m/s", "the walking speed of the scenario's moving obstacles"),
     "obstacle_start": ("s", "the sim time the moving obstacles start walking"),
     "lidar_sigma": ("m", "the LiDAR's range noise (standard deviation)"),
+    "fault_kind": ("index", "the fault injected: its index in sim.faults.FAULT_KINDS (a name "
+                            "or a choice of names in the file; needs fault_start)"),
+    "fault_start": ("s", "the fault starts at this sim time (needs fault_kind and "
+                         "fault_duration)"),
+    "fault_duration": ("s", "... and lasts this long (needs fault_start)"),
+    "fault_sector_low": ("deg", "the sector faults' beams from this angle (REP 103: 0 ahead, "
+                                "counter-clockwise; needs fault_sector_high)"),
+    "fault_sector_high": ("deg", "... to this one (low > high wraps through 180)"),
 }
+
+#: the sector of a sector fault whose space gives none (degrees): the 90 degrees ahead
+DEFAULT_SECTOR = (-45.0, 45.0)
+#: the fault parameters, each needing ``fault_start``; the sector's bounds each other
+_FAULT_KEYS = ("fault_kind", "fault_duration", "fault_sector_low", "fault_sector_high")
+_SIGNED = ("obstacle_x", "obstacle_y", "fault_sector_low", "fault_sector_high")
 
 #: The largest magnitude of a range's bound, in the parameter's unit: far past any map
 #: (metres) or run (seconds), and small enough that squares and sums stay finite.
@@ -128,11 +156,20 @@ class Space:
 
     def point(self, unit: list[float]) -> dict[str, float]:
         """The parameter values of a point of the unit cube (one coordinate in ``[0, 1]``
-        per parameter, clipped), rounded to 1 ms / 1 mm / 1e-6."""
+        per parameter, clipped), rounded to 1 ms / 1 mm / 1e-6; ``fault_kind`` (a category)
+        snapped to the nearest kind index its distribution allows (a choice's values, or
+        the integers of its range)."""
         out = {}
+        dists = {d.name: d for d in self.distributions}
         for (name, lo, hi), u in zip(self.parameters, unit):
             u = min(max(float(u), 0.0), 1.0)
             out[name] = round(lo + u * (hi - lo), 6)
+            if name == "fault_kind":
+                d = dists.get(name)
+                allowed = (d.values if d is not None and d.kind == "choice" and d.values
+                           else tuple(float(i) for i in range(math.ceil(lo),
+                                                               math.floor(hi) + 1)))
+                out[name] = min(allowed, key=lambda v: (abs(v - out[name]), v))
         return out
 
 
@@ -214,6 +251,11 @@ def _parameter(key: str, rng, params: dict, sc: Scenario, name: str, fail):
     raises)."""
     if key not in PARAMETERS:
         fail(key, f"unknown parameter {key!r}; known: {', '.join(PARAMETERS)}")
+    if key == "fault_kind":
+        rng, fixed = _fault_kind(rng, fail)
+        if fixed is not None:
+            _fault_needs(key, params, fail)
+            return rng, fixed
     if isinstance(rng, dict):
         try:
             dist = parse_distribution(key, rng, key not in ("obstacle_x", "obstacle_y"),
@@ -223,6 +265,9 @@ def _parameter(key: str, rng, params: dict, sc: Scenario, name: str, fail):
         if dist.fault is not None and key in ("obstacle_x", "obstacle_y"):
             fail(key, f"{key}: a fault share is not supported for the obstacle's "
                       "position (it needs its partner); use dropout or a delay")
+        if dist.fault is not None and key in _FAULT_KEYS:
+            fail(key, f"{key}: a fault share goes on fault_start (the fault happens or "
+                      "not as a whole)")
         rng = list(dist.range)
     else:
         dist = None
@@ -238,8 +283,15 @@ def _parameter(key: str, rng, params: dict, sc: Scenario, name: str, fail):
         fail(key, f"{key}: the range [{rng[0]:g}, {rng[1]:g}] goes beyond "
                   f"+-{MAX_MAGNITUDE:g} {PARAMETERS[key][0]} (the simulator's arithmetic "
                   "on it would overflow)")
-    if rng[0] < 0 and key not in ("obstacle_x", "obstacle_y"):
+    if rng[0] < 0 and key not in _SIGNED:
         fail(key, f"{key} cannot be negative")
+    if key.startswith("fault_sector") and not -180 <= rng[0] <= rng[1] <= 180:
+        fail(key, f"{key} must lie in [-180, 180] degrees")
+    if key == "fault_kind" and not (0 <= rng[0] and rng[1] <= len(FAULT_KINDS) - 1):
+        fail(key, f"fault_kind's indices run from 0 to {len(FAULT_KINDS) - 1} "
+                  f"({', '.join(FAULT_KINDS)}); a name says which")
+    if key.startswith("fault_"):
+        _fault_needs(key, params, fail)
     if key == "obstacle_speed" and not rng[0] > 0:
         fail(key, "obstacle_speed must be > 0 m/s")
     if key in _NEEDS and _NEEDS[key] not in params and not (
@@ -254,8 +306,42 @@ def _raise(msg: str):
     raise DistributionError(msg)
 
 
+def _kind_index(name, fail) -> float:
+    if isinstance(name, str):
+        if name not in FAULT_KINDS:
+            fail("fault_kind", f"fault_kind: unknown fault {name!r}; known: "
+                               f"{', '.join(FAULT_KINDS)}")
+        return float(FAULT_KINDS.index(name))
+    return name
+
+
+def _fault_kind(rng, fail) -> tuple[object, Distribution | None]:
+    """``fault_kind``'s entry with names as indices: a single name is the fixed kind
+    (``([i, i], its distribution)``); a choice's names become indices (``(entry, None)``,
+    parsed as any entry then)."""
+    if isinstance(rng, str):
+        i = _kind_index(rng, fail)
+        return [i, i], Distribution("fault_kind", "choice", values=(i,), weights=(1.0,))
+    if isinstance(rng, dict) and isinstance(rng.get("values"), list):
+        rng = dict(rng, values=[_kind_index(v, fail) for v in rng["values"]])
+    return rng, None
+
+
+def _fault_needs(key: str, params: dict, fail) -> None:
+    """A fault parameter's partners (:data:`PARAMETERS`) present in ``params``."""
+    need = {"fault_start": ("fault_kind", "fault_duration"),
+            "fault_sector_low": ("fault_start", "fault_sector_high"),
+            "fault_sector_high": ("fault_start", "fault_sector_low")}.get(key, ("fault_start",))
+    for other in need:
+        if other not in params:
+            fail(key, f"{key} needs {other} too")
+
+
 def apply(scenario: Scenario, values: dict[str, float]) -> Scenario:
-    """``scenario`` with the parameter ``values`` (name -> value, :data:`PARAMETERS`)."""
+    """``scenario`` with the parameter ``values`` (name -> value, :data:`PARAMETERS`); a
+    ``fault_start`` adds one :class:`fretc.sim.faults.Fault` to the scenario's (its kind the
+    ``fault_kind`` index rounded, a sector fault without ``fault_sector_*`` on
+    :data:`DEFAULT_SECTOR`)."""
     changes: dict = {}
     for key in ("interceptor_delay", "stop_delay", "dropout_start", "dropout_duration",
                 "lidar_sigma"):
@@ -271,4 +357,14 @@ def apply(scenario: Scenario, values: dict[str, float]) -> Scenario:
             for m in scenario.movers)
     if changes.get("dropout_start") is not None and "dropout_duration" not in changes:
         changes["dropout_duration"] = scenario.dropout_duration
+    if "fault_start" in values:  # (absent: the fault of a share does not happen this run)
+        k = min(max(int(round(values["fault_kind"])), 0), len(FAULT_KINDS) - 1)
+        kind = FAULT_KINDS[k]
+        sector = ((float(values["fault_sector_low"]), float(values["fault_sector_high"]))
+                  if "fault_sector_low" in values else None)
+        if kind == "sector_nan" and sector is None:
+            sector = DEFAULT_SECTOR
+        changes["faults"] = scenario.faults + (
+            Fault(kind, float(values["fault_start"]), float(values["fault_duration"]),
+                  sector),)
     return replace(scenario, **changes)
