@@ -155,11 +155,14 @@ def in_sector(angle_min: float, angle_increment: float, n: int,
               sector: tuple[float, float]) -> np.ndarray:
     """A boolean mask ``(n,)`` of the beams whose angle (``angle_min + i * angle_increment``
     rad, wrapped to ``[-180, 180)`` degrees; REP 103) lies in ``sector`` (degrees, both ends
-    included; ``low > high`` wraps through 180)."""
+    included; ``low > high`` wraps through 180). An end is met within 1e-4 degrees, so a
+    consumer computing the angles from the message's float32 ``angle_min`` and
+    ``angle_increment`` finds the same beams (float32 rounding moves them ~1e-5 degrees;
+    a beam is 0.5 degrees)."""
     ang = np.degrees(angle_min + np.arange(n) * angle_increment)
     ang = (ang + 180.0) % 360.0 - 180.0
     lo, hi = sector
-    eps = 1e-9
+    eps = 1e-4
     if lo <= hi:
         return (ang >= lo - eps) & (ang <= hi + eps)
     return (ang >= lo - eps) | (ang <= hi + eps)
