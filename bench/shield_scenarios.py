@@ -12,6 +12,22 @@ contact, and each run in which an assumption of the environment of the shield br
 shield generated with ``--assume``). Exit 1 when the shield has a contact or leaves a mission the SIF completes
 uncompleted, else 0. The runs are those of ``python -m fretc.sim record -s S --seed K
 [--safety shield:DIR]``, in memory.
+
+With ``--fault KIND`` (repeatable, :mod:`fretc.sim.faults`) every scenario and seed is run
+again with the fault injected at each time of ``--fault-at S[,S...]`` (s of sim time: pick
+some before and some during an approach) for ``--fault-duration S`` (a sector fault on
+``--fault-sector LO:HI`` degrees, the 90 degrees ahead by default), with both Safety Systems
+(``safety_restart``: the shield's node, or the hand-written SIF's agent):
+
+    python bench/shield_scenarios.py --shield DIR --seeds 2 --scenario nominal \
+        --fault all_nan --fault frozen --fault-at 10,27 --fault-duration 3
+
+Then per fault class (``none``: the runs without a fault) and Safety System: the runs,
+missions completed, aborted and ended in contact, the least clearance, the shield's
+overridden ticks; and each run that ended in contact under a fault (scenario, seed, the
+fault's start). With faults the exit code is 1 when the shield has a contact in any run, or
+leaves uncompleted a mission the SIF completes without a fault (a fault the shield answers
+by stopping the robot may cost a mission: that is failing safe), else 0.
 """
 
 from __future__ import annotations
@@ -19,15 +35,21 @@ from __future__ import annotations
 import argparse
 import sys
 from concurrent.futures import ProcessPoolExecutor
+from dataclasses import replace
 
+from fretc.sim.faults import FAULT_KINDS, SECTOR_KINDS, Fault, parse_sector
 from fretc.sim.run import record_scenario, shield_of
 from fretc.sim.scenarios import SCENARIOS
+from fretc.sim.space import DEFAULT_SECTOR
 
 
-def _one(args: tuple[str, int, str | None]) -> tuple[str, int, str, str, float, int, int]:
-    """(scenario, seed, safety, outcome, least clearance m, overrides, shield ticks)."""
-    name, seed, shield = args
-    res = record_scenario(SCENARIOS[name], seed=seed,
+def _one(args: tuple) -> tuple[str, int, str, str, float, int, int]:
+    """(scenario, seed, safety, outcome, least clearance m, overrides, shield ticks) of
+    ``(scenario, seed, shield folder or None[, fault or None])``."""
+    name, seed, shield = args[:3]
+    fault = args[3] if len(args) > 3 else None
+    sc = SCENARIOS[name] if fault is None else replace(SCENARIOS[name], faults=(fault,))
+    res = record_scenario(sc, seed=seed,
                           shield=shield_of(f"shield:{shield}") if shield else None)
     outcome = "contact" if res.contact is not None else res.outcome
     return (name, seed, "shield" if shield else "sif", outcome, res.min_clearance,
@@ -42,8 +64,19 @@ def main() -> int:
     ap.add_argument("--jobs", type=int, default=1, help="runs in parallel processes")
     ap.add_argument("--scenario", action="append", choices=list(SCENARIOS),
                     help="only these scenarios (repeatable; default: all)")
+    ap.add_argument("--fault", action="append", choices=list(FAULT_KINDS),
+                    help="also run every scenario and seed with this fault (repeatable)")
+    ap.add_argument("--fault-at", default="", metavar="S[,S...]",
+                    help="the fault's start times [s of sim time]")
+    ap.add_argument("--fault-duration", type=float, default=None, metavar="S",
+                    help="how long each fault lasts [s]")
+    ap.add_argument("--fault-sector", default=None, metavar="LO:HI",
+                    help="the sector [degrees, REP 103] of sector_nan and near_returns "
+                         "(default -45:45, the 90 degrees ahead)")
     a = ap.parse_args()
     names = a.scenario or list(SCENARIOS)
+    if a.fault:
+        return _faults(ap, a, names)
     work = [(n, k, s) for n in names for k in range(1, a.seeds + 1) for s in (None, a.shield)]
     if a.jobs > 1:
         with ProcessPoolExecutor(a.jobs) as pool:
@@ -74,6 +107,62 @@ def main() -> int:
     print(f"{len(work) // 2} runs per Safety System; shield: {len(contacts)} contacts, "
           f"{len(lost)} missions the SIF completes left uncompleted")
     return 1 if lost or contacts else 0
+
+
+def _fault_list(ap: argparse.ArgumentParser, a: argparse.Namespace) -> list[Fault]:
+    """The faults of ``--fault``, ``--fault-at``, ``--fault-duration`` and
+    ``--fault-sector``: each kind at each time (exit 2 on a bad value)."""
+    try:
+        times = [float(x) for x in a.fault_at.split(",") if x.strip()]
+        if not times or a.fault_duration is None:
+            raise ValueError("--fault needs --fault-at S[,S...] and --fault-duration S")
+        sector = parse_sector(a.fault_sector) if a.fault_sector else DEFAULT_SECTOR
+        return [Fault(k, t, a.fault_duration, sector if k in SECTOR_KINDS else None)
+                for k in a.fault for t in times]
+    except ValueError as exc:
+        ap.error(str(exc))
+
+
+def _faults(ap: argparse.ArgumentParser, a: argparse.Namespace, names: list[str]) -> int:
+    """The comparison under faults (module docstring); the exit code."""
+    faults = _fault_list(ap, a)
+    seeds = range(1, a.seeds + 1)
+    work = [(n, k, s, f) for f in [None, *faults] for n in names for k in seeds
+            for s in (None, a.shield)]
+    if a.jobs > 1:
+        with ProcessPoolExecutor(a.jobs) as pool:
+            rows = list(pool.map(_one, work, chunksize=4))
+    else:
+        rows = [_one(w) for w in work]
+    by = {(w[0], w[1], w[2] and "shield" or "sif", w[3]): r[3:] for w, r in zip(work, rows)}
+    print(f"faults of {a.fault_duration:g} s at {a.fault_at} s; scenarios: "
+          f"{', '.join(names)}; seeds 1..{a.seeds}")
+    print(f"{'fault':15s} {'safety':7s} {'runs':>5s} completed aborted contact  "
+          "least clearance  overridden ticks")
+    for kind in ["none", *a.fault]:
+        fs = [None] if kind == "none" else [f for f in faults if f.kind == kind]
+        for s in ("sif", "shield"):
+            runs = [by[(n, k, s, f)] for f in fs for n in names for k in seeds]
+            done = sum(o == "completed" for o, *_ in runs)
+            contact = sum(o == "contact" for o, *_ in runs)
+            least = min(c for _o, c, *_ in runs)
+            over = (f"{sum(ov for _o, _c, ov, _t in runs)} of "
+                    f"{sum(t for *_x, t in runs)}") if s == "shield" else "-"
+            print(f"{kind:15s} {s:7s} {len(runs):5d} {done:9d} {len(runs) - done - contact:7d} "
+                  f"{contact:7d}  {least:15.3f}  {over}")
+    contacts = [(n, k, s, f) for (n, k, s, f), r in by.items() if r[0] == "contact"]
+    for n, k, s, f in contacts:
+        where = "no fault" if f is None else f"{f.kind} at {f.start:g} s"
+        print(f"contact: {s} {n} seed {k}: {where}")
+    shield_contacts = [c for c in contacts if c[2] == "shield"]
+    lost = [(n, k) for n in names for k in seeds
+            if by[(n, k, "sif", None)][0] == "completed"
+            and by[(n, k, "shield", None)][0] != "completed"]
+    for n, k in lost:
+        print(f"completed by the SIF, not by the shield (no fault): {n} seed {k}")
+    print(f"{len(work) // 2} runs per Safety System; shield: {len(shield_contacts)} contacts, "
+          f"{len(lost)} missions the SIF completes without a fault left uncompleted")
+    return 1 if shield_contacts or lost else 0
 
 
 if __name__ == "__main__":
