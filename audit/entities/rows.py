@@ -40,7 +40,8 @@ __all__ = ["ItemField", "row_fields", "row_values", "item_values", "reads_items_
            "key_reader", "KeyReader"]
 
 #: The functions a row-wise variable may call (reductions and arithmetic over the items).
-_FUNCS = frozenset({"abs", "min", "max", "mean", "norm", "any", "all", "count", "len", "sqrt"})
+_FUNCS = frozenset({"abs", "min", "max", "mean", "norm", "any", "all", "count", "len",
+                    "invalid", "sqrt"})
 
 
 @dataclass(frozen=True)

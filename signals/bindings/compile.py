@@ -245,7 +245,7 @@ def _call(node: FuncCall, ops: Ops, extractors: dict[Field, Evaluator],
         return lambda st: (st.now - st.times[topic]) / NS_PER_S
     if func == "tf":
         return _tf(node)
-    if func in ("delta", "timedelta", "derivative"):
+    if func in ("delta", "timedelta", "derivative", "unchanged"):
         return _stateful(node, ops, consts)
     args = [compile_node(a, ops, extractors, consts) for a in node.args]
     if func == "sqrt":
@@ -332,6 +332,8 @@ def _stateful(node: FuncCall, ops: Ops, consts: dict[str, Any]) -> Evaluator:
         before_state.msgs[topic], before_state.times[topic] = prev, st.prev_times[topic]
         before_state.now = st.prev_times[topic]
         now, before = inner(st), inner(before_state)
+        if func == "unchanged":
+            return _same_value(now, before)
         try:
             d = float(now) - float(before)  # numbers (numpy scalars too), not arrays
         except (TypeError, ValueError):
@@ -340,6 +342,26 @@ def _stateful(node: FuncCall, ops: Ops, consts: dict[str, Any]) -> Evaluator:
             return d
         return d / dt if dt != 0 else math.nan
     return stateful
+
+
+def _same_value(a: Any, b: Any) -> bool:
+    """``unchanged``: whether two values of one field (numbers, booleans, strings or arrays,
+    a :class:`Valid`'s data) are the same, NaN equal to NaN (a frozen frame repeats its
+    NaNs too)."""
+    if isinstance(a, Valid):
+        a = a.data
+    if isinstance(b, Valid):
+        b = b.data
+    if isinstance(a, np.ndarray) or isinstance(b, np.ndarray):
+        x, y = np.asarray(a), np.asarray(b)
+        if x.shape != y.shape:
+            return False
+        if x.dtype.kind == "f" and y.dtype.kind == "f":
+            return bool(np.array_equal(x, y, equal_nan=True))
+        return bool(np.array_equal(x, y))
+    if isinstance(a, float) and isinstance(b, float) and a != a and b != b:
+        return True
+    return bool(a == b)
 
 
 def _joint(node: FuncCall, args: list[Evaluator]) -> Evaluator:
@@ -442,7 +464,8 @@ def per_message_topic(node: Expr) -> str | None:
     operators and reductions; no ``age``, no other topic), or None."""
     topics = set()
     for n in walk(node):
-        if isinstance(n, FuncCall) and n.func in ("age", "delta", "timedelta", "derivative"):
+        if isinstance(n, FuncCall) and n.func in ("age", "delta", "timedelta", "derivative",
+                                                  "unchanged"):
             return None
         if isinstance(n, Field):
             topics.add(n.topic)

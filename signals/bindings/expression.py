@@ -192,20 +192,23 @@ class FuncCall(Expr):
 #: is its third).
 FUNCS = {
     "abs": (1, 1), "norm": (1, None), "min": (1, None), "max": (1, None), "mean": (1, 1),
-    "any": (1, 1), "all": (1, 1), "count": (1, 1), "len": (1, 1), "age": (1, 1), "waiting": (1, 1), "goal_waiting": (1, 1),
+    "any": (1, 1), "all": (1, 1), "count": (1, 1), "len": (1, 1), "invalid": (1, 1), "age": (1, 1), "waiting": (1, 1), "goal_waiting": (1, 1),
     "joint": (3, 3), "tf": (3, 3),
     "any_of_messages": (1, 1), "all_of_messages": (1, 1), "count_of_messages": (1, 1),
     "min_of_messages": (1, 1), "max_of_messages": (1, 1),
     "sqrt": (1, 1), "delta": (1, 1), "timedelta": (1, 1), "derivative": (1, 1),
+    "unchanged": (1, 1),
 }
 #: Foxglove's message path modifiers a field may end in (``/odom.x@derivative``).
 MODIFIERS = ("derivative", "delta", "timedelta", "abs", "negative", "sqrt", "rad2deg",
              "deg2rad")
 #: The modifiers (and functions) that read the message before the held one of the field's
 #: topic: ``delta`` (value - previous value), ``timedelta`` (seconds between the two, on
-#: the time base), ``derivative`` (delta / timedelta, per second). A tick is evaluated
-#: once the topic has two messages (warm-up until then).
-STATEFUL = ("delta", "timedelta", "derivative")
+#: the time base), ``derivative`` (delta / timedelta, per second), ``unchanged`` (true when
+#: the value, a number or a whole array such as a LaserScan's ranges, is bit for bit the
+#: previous message's: a driver republishing a frozen frame with fresh stamps; NaN items
+#: equal). A tick is evaluated once the topic has two messages (warm-up until then).
+STATEFUL = ("delta", "timedelta", "derivative", "unchanged")
 #: Aggregations over the messages of one topic since the previous tick (docs/bindings.md, "events
 #: between ticks"): function -> how the per-message values are folded. Only as the whole
 #: binding; :func:`check_aggregate`.

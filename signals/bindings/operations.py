@@ -5,7 +5,10 @@ Python ``bool``/``float`` go through Python operators (fast path for one tick); 
 through numpy, item by item, keeping the validity mask of :class:`Valid` arrays.  ``x / 0``
 is ±inf (nan for 0/0) as IEEE 754; NaN propagates through ``min``/``max`` of several values,
 as ``np.minimum``/``np.maximum``.  Reductions of an empty array: ``min`` → +inf, ``max`` →
--inf, ``mean`` → nan, ``any`` → false, ``all`` → true, ``count``/``len``/``norm`` → 0.
+-inf, ``mean`` → nan, ``any`` → false, ``all`` → true, ``count``/``len``/``norm`` → 0;
+but ``min``/``max`` of LaserScan ranges with no valid return and an invalid measurement
+(REP 117: NaN, a value outside the limits) → NaN, unknown (a blind LiDAR is no clear path),
+and ``invalid(ranges)`` counts the invalid measurements.
 
 NaN in comparisons (docs/bindings.md, "NaN"): under the default policy (``[tick] nan =
 "unread"``) a comparison with a NaN operand is neither true nor false: its value is NaN, and
@@ -100,6 +103,30 @@ class Ops:
             u &= a.mask
         return u if u.any() else None
 
+    @staticmethod
+    def _invalid(a: Valid) -> np.ndarray:
+        """The items REP 117 calls invalid measurements: outside the validity mask and not
+        +inf ("no return within range_max", a clear beam): NaN, and finite values outside
+        ``[range_min, range_max]`` (-inf, a detection too close, reads as ``range_min``:
+        valid). None of an array without a mask."""
+        if a.mask is None or a.data.dtype.kind != "f":
+            return np.zeros(a.data.shape, dtype=np.bool_)
+        return ~a.mask & ~np.isposinf(a.data)
+
+    def _blind(self, a: Valid, got: Any) -> Any:
+        """``min``/``max`` of a masked array (REP 117's LaserScan ranges) with no valid item
+        but an invalid measurement: NaN, unknown, not the empty array's +inf / -inf. A LiDAR
+        that keeps publishing while every return is NaN (a covered window, a failed
+        receiver) measured nothing: its "nearest return" is no clear path (the shield reads
+        the NaN as an input it cannot read, the audit as an unknown tick). Every beam
+        +inf (no return within range) is still +inf: REP 117's clear view."""
+        if a.mask is None or a.data.dtype.kind != "f":
+            return got
+        blind = ~a.mask.any(axis=self.axis) & self._invalid(a).any(axis=self.axis)
+        if not np.any(blind):
+            return got
+        return np.where(blind, np.nan, got)
+
     def _count(self, a: Valid) -> Any:
         if a.mask is None:
             n = a.data.shape[-1]
@@ -114,16 +141,20 @@ class Ops:
         return x.item() if isinstance(x, np.generic) else x
 
     def reduce(self, func: str, a: Valid) -> Any:
-        """``func`` (min, max, mean, norm, any, all, count, len) of an array over its valid
-        items: a number per tick (one tick) or an array of them (vectorized)."""
+        """``func`` (min, max, mean, norm, any, all, count, len, invalid) of an array over
+        its valid items (``invalid``: its invalid measurements, :meth:`_invalid`; ``min`` and
+        ``max`` of no valid item and an invalid one NaN, :meth:`_blind`): a number per tick
+        (one tick) or an array of them (vectorized)."""
         ax = self.axis
         # ndarray methods (not np.min etc.): same ufunc reductions, less Python overhead.
         if func == "min":  # where=: no filled copy; the same values
-            return self._out(num(a.data).min(axis=ax, initial=np.inf,
-                                              where=True if a.mask is None else a.mask))
+            return self._out(self._blind(a, num(a.data).min(
+                axis=ax, initial=np.inf, where=True if a.mask is None else a.mask)))
         if func == "max":
-            return self._out(num(a.data).max(axis=ax, initial=-np.inf,
-                                              where=True if a.mask is None else a.mask))
+            return self._out(self._blind(a, num(a.data).max(
+                axis=ax, initial=-np.inf, where=True if a.mask is None else a.mask)))
+        if func == "invalid":
+            return self._out(self._invalid(a).sum(axis=ax).astype(np.float64))
         if func == "mean":
             total = self._filled(a, 0.0).sum(axis=ax)
             n = a.mask.sum(axis=ax) if a.mask is not None else a.data.shape[-1]

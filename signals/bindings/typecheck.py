@@ -231,6 +231,9 @@ class _TypeChecker:
             return "number"
         if f in ("age", "tf", "timedelta", "waiting", "goal_waiting"):
             return "number"
+        if f == "unchanged":
+            self.type(node.args[0])
+            return "bool"
         if f in ("delta", "derivative", "sqrt"):
             t = self.type(node.args[0])
             self.need(node.args[0], t, ("number",), f"{f}() takes a number", node)
@@ -255,10 +258,10 @@ class _TypeChecker:
         for a, t in zip(node.args, ts):
             if f in ("any", "all", "count"):
                 self.need(a, t, _ARRAYS, f"{f}() takes an array", node)
-            elif f == "len":
+            elif f in ("len", "invalid"):
                 if t not in ("any", "array_bool", "array_number", "array_string",
                              "array_other"):
-                    self.need(a, t, ("array_number",), "len() takes an array", node)
+                    self.need(a, t, ("array_number",), f"{f}() takes an array", node)
             else:
                 self.need(a, t, _NUMS, f"{f}() takes numbers", node)
         if f in ("any", "all"):

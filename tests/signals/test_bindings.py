@@ -304,11 +304,19 @@ def test_laserscan_negative_infinity_is_a_too_close_return():
 
 
 def test_laserscan_with_no_valid_return():
+    """No valid return and invalid measurements (REP 117: NaN, 0.01 and 50.0 outside the
+    limits): ``min`` is unknown (NaN), and ``min(...) < 0.9`` neither true nor false; it was
+    +inf and false, a blind LiDAR read as a clear path. Only +inf beams: the clear view."""
     m = {"/scan": scan([np.nan, np.inf, 0.01, 50.0], range_min=0.1, range_max=10.0)}
-    assert ev("min(/scan.ranges)", m) == math.inf
-    assert ev("max(/scan.ranges)", m) == -math.inf
+    assert math.isnan(ev("min(/scan.ranges)", m))
+    assert math.isnan(ev("max(/scan.ranges)", m))
     assert math.isnan(ev("mean(/scan.ranges)", m))
-    assert ev("min(/scan.ranges) < 0.9", m) is False
+    assert math.isnan(ev("min(/scan.ranges) < 0.9", m))
+    assert ev("invalid(/scan.ranges)", m) == 3.0
+    clear = {"/scan": scan([np.inf, np.inf], range_min=0.1, range_max=10.0)}
+    assert ev("min(/scan.ranges)", clear) == math.inf
+    assert ev("min(/scan.ranges) < 0.9", clear) is False
+    assert ev("invalid(/scan.ranges)", clear) == 0.0
     assert ev("len(/scan.ranges)", m) == 0.0
     assert ev("count(/scan.ranges < 100)", m) == 0.0
     assert ev("any(/scan.ranges < 100)", m) is False
@@ -340,8 +348,17 @@ def test_rep117_reductions_match_numpy(ranges, rmin, rmax):
     r = np.where(np.isneginf(r), msg.range_min, r)  # REP 117 -inf: closer than range_min
     ok = (r >= msg.range_min) & (r <= msg.range_max)
     v = r[ok]
-    assert ev("min(/scan.ranges)", m) == (v.min() if v.size else math.inf)
-    assert ev("max(/scan.ranges)", m) == (v.max() if v.size else -math.inf)
+    # (no valid return: +inf / -inf when every beam is +inf, "no return", a clear view; NaN,
+    # unknown, when one is an invalid measurement: a blind LiDAR is no clear path)
+    invalid = ~ok & ~np.isposinf(r)
+    blind = not v.size and invalid.any()
+    lo, hi = ev("min(/scan.ranges)", m), ev("max(/scan.ranges)", m)
+    if blind:
+        assert math.isnan(lo) and math.isnan(hi)
+    else:
+        assert lo == (v.min() if v.size else math.inf)
+        assert hi == (v.max() if v.size else -math.inf)
+    assert ev("invalid(/scan.ranges)", m) == float(invalid.sum())
     assert ev("count(/scan.ranges < 3)", m) == float((v < 3).sum())
     assert ev("len(/scan.ranges)", m) == float(v.size)
     mean = ev("mean(/scan.ranges)", m)
