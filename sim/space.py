@@ -290,6 +290,8 @@ def _parameter(key: str, rng, params: dict, sc: Scenario, name: str, fail):
     if key == "fault_kind" and not (0 <= rng[0] and rng[1] <= len(FAULT_KINDS) - 1):
         fail(key, f"fault_kind's indices run from 0 to {len(FAULT_KINDS) - 1} "
                   f"({', '.join(FAULT_KINDS)}); a name says which")
+    if key == "fault_kind" and dist is not None and any(v != int(v) for v in dist.values):
+        fail(key, "fault_kind's choices are kinds: names, or whole indices")
     if key.startswith("fault_"):
         _fault_needs(key, params, fail)
     if key == "obstacle_speed" and not rng[0] > 0:

@@ -345,6 +345,8 @@ def test_a_space_snaps_the_kind_to_the_listed_ones(tmp_path):
      "unknown fault 'bogus'"),
     ('fault_kind = "all_nan"\nfault_start = [1, 2]', "fault_start needs fault_duration"),
     ('fault_kind = [0, 12]\nfault_start = [1, 2]\nfault_duration = [1, 2]', "from 0 to 9"),
+    ('fault_kind = {dist = "choice", values = [1, 2.5]}\nfault_start = [1, 2]\n'
+     'fault_duration = [1, 2]', "names, or whole indices"),
     ('fault_kind = {dist = "choice", values = [1, 2], fault = 0.5}\nfault_start = [1, 2]\n'
      'fault_duration = [1, 2]', "goes on fault_start"),
     ('fault_kind = "sector_nan"\nfault_start = [1, 2]\nfault_duration = [1, 2]\n'
