@@ -40,7 +40,7 @@ output (a requirement's parsed AST). So:
   turns a violated requirement into a satisfied one). An entry whose seal does not verify
   (planted, altered, copied from another cache or another folder) is a miss, never decoded.
   Data entries are JSON or ``marshal`` data of plain values (no pickle): decoding them runs
-  no code. (Until issue 91, the key was a file ``seal-key`` in the cache folder itself, and
+  no code. (Until hostile round 9, the key was a file ``seal-key`` in the cache folder itself, and
   travelled with it; such a file is now ignored.)
 * **Bounded reads.** An entry is read only when it is a regular file (opened without
   following a symbolic link, non-blocking, checked with ``fstat`` after the open: a FIFO or a
@@ -64,7 +64,7 @@ __all__ = ["cache_dir", "key_dir", "key_of", "files_key", "read_sealed", "write_
 #: the largest entry read or written (bytes); a larger file in the folder is a miss
 MAX_ENTRY_BYTES = 64 * 1024 * 1024
 #: the name of the seal key's file in the key's folder (:func:`key_dir`; never a cache folder:
-#: an entry may not have this name either, the name a key had in the cache folder until issue 91)
+#: an entry may not have this name either, the name a key had in the cache folder until hostile round 9)
 KEY_FILE = "seal-key"
 _KEY_BYTES = 32
 #: root -> the folder to use (the same string), or "" when refused (checked once a process)

@@ -226,7 +226,7 @@ def _inside(path: str, folder: str) -> bool:
 
 def refuse_replacing_inputs(outputs: Iterable[Named],
                             inputs: Iterable[Named]) -> None:
-    """Refuse outputs that would replace an input of the same command (issue 91, R1 and
+    """Refuse outputs that would replace an input of the same command (hostile round 9, R1 and
     N4), before anything is written: an output file that is an input file (resolved, links
     followed; a hard link to it), or that lies inside an input folder read whole (a rosbag2
     folder). ``outputs`` and ``inputs`` are ``(what, path)`` pairs (``("--json", "a.json")``,

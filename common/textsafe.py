@@ -22,7 +22,7 @@ shows them so that they cannot change the output's structure or the reader's scr
   white space folded into one space.
 
 Generated code embeds ids, texts and names too, and there the text must not become code
-(issue 91, J1: a requirement id holding a line break, or Java's six characters ``\\u000a``,
+(hostile round 9, J1: a requirement id holding a line break, or Java's six characters ``\\u000a``,
 written raw into a ``//`` comment of a generated Java class ran as code when the class
 loaded). One function per target language, used everywhere that target embeds data:
 

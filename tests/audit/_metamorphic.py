@@ -91,10 +91,10 @@ WHOLE = ("max_of_messages(", "min_of_messages(", "any_of_messages(", "all_of_mes
          "rate(")
 #: forms of an array of numbers ``{p}`` (its items ``{p}[:]``)
 ARRAY_FORMS = ["min({p}[:])", "max({p}[:])", "mean({p}[:])", "norm({p}[:])", "len({p})",
-               "count({p}[:] > {c})"]
+               "count({p}[:] > {c})", "invalid({p})"]
 #: forms of a boolean field (already a condition)
 BOOL_FORMS = ["{p}", "!{p}", "any_of_messages({p})", "all_of_messages({p})", "{p} == 1",
-              "{p} != 0", "count_of_messages({p}) > 0"]
+              "{p} != 0", "count_of_messages({p}) > 0", "unchanged({p})"]
 #: requirement templates over the variables ``{a}`` and ``{b}``
 TEMPLATES = ["the sys shall always satisfy {a}", "the sys shall never satisfy {a}",
              "upon {a} the sys shall within 3 ticks satisfy {b}",

@@ -1,6 +1,6 @@
 """A CSV trace still being written during its audit is judged over one extent: the bytes the
 audit's first read found (:attr:`fretc.logs.CsvSource.extent`), for every requirement and
-every read (issue 91, W1).
+every read (hostile round 9, W1).
 
 The audit reads a CSV trace more than once: the streams judge while the rows are read, a
 requirement whose ticks turn out unknown is judged whole from a second read, and the values

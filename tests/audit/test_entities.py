@@ -299,7 +299,7 @@ _CONSISTENT = st.one_of(
 @settings(max_examples=300, deadline=None)
 @given(st.lists(_CONSISTENT, min_size=1, max_size=8))
 def test_the_margin_over_entities_agrees_in_sign_with_its_verdict(entities):
-    """Issue 91, E2: entities whose own margins agree with their verdicts (a violated one
+    """Hostile round 9, E2: entities whose own margins agree with their verdicts (a violated one
     may have none: a violation at distance 0) give a requirement whose margin agrees with
     its verdict: violated, negative (never the positive margin of a satisfied entity beside
     a violated one without a margin); satisfied or vacuous, >= 0; unknown or error, none.

@@ -1,4 +1,4 @@
-"""TF frames as entities, named as tf2 names them (hostile round 9, issue 91, E1): tf2 stores
+"""TF frames as entities, named as tf2 names them (hostile round 9, E1): tf2 stores
 every transform's frames without a leading ``/`` (ROS 2 geometry2,
 ``BufferCore::setTransformImpl``: ``stripSlash``), so ``/car`` and ``car`` are one frame.
 fretc read them as two entities, ``car`` and ``/car``, both reading the one frame through

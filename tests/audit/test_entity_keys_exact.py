@@ -1,4 +1,4 @@
-"""Entity keys are exact for every integer width and encoding (hostile round 9, issue 91,
+"""Entity keys are exact for every integer width and encoding (hostile round 9,
 E3): ``uint64`` ids past 2**53 were read as float64, two tracks one double apart merged into
 one entity and one's violation came out ``satisfied`` (exit 0). Here two tracks whose ids a
 float64 merges (2**53 - 1 and 2**53 are distinct doubles, the control; 2**53 and 2**53 + 1,

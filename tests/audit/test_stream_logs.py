@@ -1,4 +1,4 @@
-"""A log that is a stream, not a file (hostile round 9, issue 91): a FIFO, ``/dev/stdin``, a
+"""A log that is a stream, not a file (hostile round 9): a FIFO, ``/dev/stdin``, a
 shell's ``<(...)`` (``/dev/fd/N``). ``fretc audit`` ended in an internal error
 (NotADirectoryError) and ``fretc shield-replay`` in "not seekable"; both now refuse it
 before reading a byte, exit 2, naming the path (fretc reads a log more than once and out of

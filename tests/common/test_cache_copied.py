@@ -1,4 +1,4 @@
-"""The cache's key does not travel with the cache (issue 91, hostile round 9, C1).
+"""The cache's key does not travel with the cache (hostile round 9, C1).
 
 Until then the seal key was a file ``seal-key`` in the cache folder it sealed, so a cache
 folder copied or restored with its modes (a CI cache, a tar file, an image layer) brought a

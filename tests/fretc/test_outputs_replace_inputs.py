@@ -1,4 +1,4 @@
-"""Outputs that would replace inputs are refused (hostile round 9, issue 91, R1 and N4):
+"""Outputs that would replace inputs are refused (hostile round 9, R1 and N4):
 ``fretc shield-replay SH d/a.mcap d/a.shielded.mcap -o d`` overwrote its second input before
 reading it and reported on it (exit 0); ``--json PATH`` could name an input; ``fretc audit
 runs/*.csv --write-csv runs`` replaced each input CSV with its sampled trace. Now every

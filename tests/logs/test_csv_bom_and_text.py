@@ -1,4 +1,4 @@
-"""CSV traces as spreadsheets write them (hostile round 9, issue 91): a UTF-8 byte order mark
+"""CSV traces as spreadsheets write them (hostile round 9): a UTF-8 byte order mark
 before the header (Excel's "CSV UTF-8") was read into the first column's name and refused
 the file; a free-text column no requirement reads (a note, a comment) refused the whole
 file. Now the mark is skipped and an unread column is not read; the verdicts are those of

@@ -1,5 +1,5 @@
 """A flight log's staleness requirement (``age()`` in the bindings) ticks to the log's end, as
-on an MCAP (issue 91): a GPS that dies before the end of a flight is stale from ``age() >
+on an MCAP (hostile round 9): a GPS that dies before the end of a flight is stale from ``age() >
 limit`` on, not judged only up to its own last message. The log's end is the last log time
 of a message of any topic (``log_end``, known when the file is opened), whichever topics the
 requirement reads."""

@@ -1,5 +1,5 @@
 """A ROS schema that spells a primitive another way the interface language allows is ROS's
-layout (issue 91): ``uint8 level`` where diagnostic_msgs writes ``byte level`` (ROS 2:
+layout (hostile round 9): ``uint8 level`` where diagnostic_msgs writes ``byte level`` (ROS 2:
 rosidl_adapter maps ``byte`` to IDL ``octet``, ``char`` to ``uint8``, one unsigned byte each
 on the wire); a real difference inside a sequence of messages is named by its field path.
 """

@@ -1,4 +1,4 @@
-"""PX4 multi-instance uORB topics as entities of one kind (issue 91): ``sensor_gps`` (instance
+"""PX4 multi-instance uORB topics as entities of one kind (hostile round 9): ``sensor_gps`` (instance
 0) and ``sensor_gps/1`` are topics of their own, and ``sensor_gps/*`` holds every instance's
 messages with its ``multi_id`` (ULog's instance number), the key of one value per message of an
 ``[entities]`` kind (docs/bindings.md, "One message, one entity")."""

@@ -1,4 +1,4 @@
-"""Ids and texts from a FRET export embedded in generated code stay data (issue 91, hostile
+"""Ids and texts from a FRET export embedded in generated code stay data (hostile
 round 9, J1), each finding from its smallest input, then a property test of hostile ids per
 form.
 

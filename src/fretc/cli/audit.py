@@ -154,7 +154,7 @@ def _refuse_replacing_inputs(plan, paths: list[str], json_path: str | None,
                              junit_path: str | None, csv_dir: str | None) -> None:
     """No output of the audit (``--json``, ``--junit``, each ``--write-csv`` trace as
     :func:`_write_csvs` names it) is one of its inputs (the logs, the requirement files, the
-    binding files), checked before any log is read (issue 91, N4: ``fretc audit runs/*.csv
+    binding files), checked before any log is read (hostile round 9, N4: ``fretc audit runs/*.csv
     --write-csv runs`` replaced each input CSV with its sampled trace).
 
     Raises:

@@ -105,7 +105,7 @@ def export_cmd(ctx: click.Context, src: str | None, from_json: str, output: str 
                                "--matrix or --matrix-html")
     from fretc.common.outputs import refuse_replacing_inputs
 
-    # (issue 91, R1: no output replaces an input; -r's a file, or a Doorstop tree read whole)
+    # (hostile round 9, R1: no output replaces an input; -r's a file, or a Doorstop tree read whole)
     refuse_replacing_inputs([("-o", output), ("--needs", needs_path), ("--sdoc", sdoc_path),
                              ("--matrix", matrix_csv), ("--matrix-html", matrix_html)],
                             [("the requirements (-r)", src), ("--from-json", from_json),

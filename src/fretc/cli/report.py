@@ -132,7 +132,7 @@ REPORT_FILES = ("report.html", "report.md", "audit.json", "matrix.html", "covera
 def _refuse_replacing_inputs(output: str, inputs: list, check_json: str | None,
                              psl_map: str | None) -> None:
     """No file the report writes in ``output`` (:data:`REPORT_FILES`) is one of its
-    ``inputs`` (``(what, path)``), ``--check`` or ``--psl-map`` (issue 91, R1: ``fretc report
+    ``inputs`` (``(what, path)``), ``--check`` or ``--psl-map`` (hostile round 9, R1: ``fretc report
     --from-json out/audit.json -o out`` replaced its own input); checked before the audit
     runs. (``--annotate`` never writes over the original log: a note says so.)
 

@@ -73,7 +73,7 @@ def shield_replay_cmd(ctx: click.Context, shield_dir: str, logs: tuple[str, ...]
     if twice:
         raise ReplayError(f"two logs would be written to {', '.join(twice)} in {out_dir}: "
                           "replay them into different folders")
-    # (issue 91, R1: -o d with d/a.shielded.mcap given as a log overwrote it before reading)
+    # (hostile round 9, R1: -o d with d/a.shielded.mcap given as a log overwrote it before reading)
     refuse_replacing_inputs(
         [("-o", Path(out_dir) / n) for n in names] + [("--json", json_path)],
         [("the log", log) for log in logs]
