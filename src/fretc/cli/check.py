@@ -174,6 +174,14 @@ def check_cmd(files: tuple[str, ...], inputs: str | None, outputs: str | None,
     from fretc.check.budget import Budget, RunStopped
     from fretc.check.realizability import RealizabilityError
 
+    from fretc.cli.options import refuse_outputs_over_inputs, requirement_inputs
+
+    # no output replaces an input: -o a requirement or binding file, --witness-dir the
+    # folder of requirements read (the witnesses, NN_kind_ids.csv, never a requirement's name)
+    req_files, req_folders = requirement_inputs(files)
+    refuse_outputs_over_inputs([("-o", output)],
+                               req_files + [("the binding file", bindings_file)],
+                               [("--witness-dir", witness_dir)], req_folders)
     rs = requirement_set(files, bindings_file, component=component, only=only,
                          exclude=exclude)
     ins, outs = names_of(inputs), names_of(outputs)

@@ -94,7 +94,7 @@ def compile_cmd(files: tuple[str, ...], emit: str, as_json: bool, output: str | 
         if internal:
             sys.exit(4)  # internal error: not audit's 3 (incomplete)
         _check_output(outputs, output, ".py")
-        _write_outputs(outputs, output, ".py")
+        _write_outputs(outputs, output, ".py", _inputs(files, psl_map))
         reported = {c.id for c in failed}  # their error is printed above
         for m in modules:
             for rid, reason in m.skipped.items():
@@ -103,23 +103,25 @@ def compile_cmd(files: tuple[str, ...], emit: str, as_json: bool, output: str | 
                         "\n", " ")), err=True)
     elif emit == "c":
         from fretc.cli.emit_c import write_c
-        write_c(compiled, output, split)
+        write_c(compiled, output, split, _inputs(files, psl_map))
     elif emit == "c2po":
         from fretc.cli.emit_c import write_c2po
-        write_c2po(compiled, output, _check_output, _write_outputs)
+        inputs = _inputs(files, psl_map)
+        write_c2po(compiled, output, _check_output,
+                   lambda outs, path, suffix: _write_outputs(outs, path, suffix, inputs))
     elif emit == "prism":
         from fretc.compiler.prism import emit_prism  # lazy: only for prism
         refused: list = []
         outputs = emit_prism(compiled, refused)
         _check_output(outputs, output, ".props")
-        _write_outputs(outputs, output, ".props")
+        _write_outputs(outputs, output, ".props", _inputs(files, psl_map))
         for stem, rid, why in refused:
             click.echo(_shown(f"skipped {rid} ({stem}.props): {why}"), err=True)
     elif emit == "psl":
         from fretc.compiler.ajpf import emit_psl  # lazy: only for psl
         outputs = emit_psl(compiled, mapping_path=psl_map)  # AjpfError: the group's handler
         _check_output(outputs, output, ".psl")
-        _write_outputs(outputs, output, ".psl")
+        _write_outputs(outputs, output, ".psl", _inputs(files, psl_map))
     sys.exit(1 if failed else 0)
 
 
@@ -431,9 +433,22 @@ def _check_output(outputs: dict, output: str | None, suffix: str) -> None:
         sys.exit(2)
 
 
-def _write_outputs(outputs: dict, output: str | None, suffix: str) -> None:
+def _inputs(files: Sequence[str], psl_map: str | None) -> tuple[list, list]:
+    """The inputs compile's outputs are compared with: ``(files, folders)``, the requirement
+    files (and ``--psl-map``) and the folders of requirements read
+    (:func:`fretc.cli.options.requirement_inputs`)."""
+    from fretc.cli.options import requirement_inputs
+
+    req_files, req_folders = requirement_inputs(files)
+    return req_files + [("--psl-map", psl_map)], req_folders
+
+
+def _write_outputs(outputs: dict, output: str | None, suffix: str,
+                   inputs: tuple[list, list] = ([], [])) -> None:
     """``outputs`` maps a file stem to text. One output and ``-o FILE``: write the file;
-    ``-o DIR``: one file per stem; no ``-o``: print them."""
+    ``-o DIR``: one file per stem; no ``-o``: print them. No file written is one of
+    ``inputs`` (:func:`_inputs`), nor ``-o DIR`` a folder of requirements read: refused
+    before any is written (:func:`fretc.cli.options.refuse_outputs_over_inputs`)."""
     if output is None:
         for text in outputs.values():
             click.echo(text, nl=False)
@@ -441,8 +456,14 @@ def _write_outputs(outputs: dict, output: str | None, suffix: str) -> None:
     from pathlib import Path  # lazy: --emit ltl does not need it (start-up time)
 
     from fretc.common.outputs import output_folder, write_file
+
+    from fretc.cli.options import refuse_outputs_over_inputs
     out = Path(output)
-    if len(outputs) == 1 and not out.is_dir() and not output.endswith(("/", "\\")):
+    one = len(outputs) == 1 and not out.is_dir() and not output.endswith(("/", "\\"))
+    refuse_outputs_over_inputs([("-o", out)] if one else
+                               [("-o", out / f"{stem}{suffix}") for stem in outputs],
+                               inputs[0], [] if one else [("-o", out)], inputs[1])
+    if one:
         # one module: -o is the file
         output_folder(out.parent)
         write_file(out, next(iter(outputs.values())))

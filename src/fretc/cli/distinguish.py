@@ -68,6 +68,9 @@ def distinguish_cmd(a: str, b: str, files: tuple[str, ...], tick_period: str | N
     from fretc.check.distinguish import distinguish
     from fretc.reports.distinction import distinction_text
 
+    from fretc.cli.options import refuse_outputs_over_inputs, requirement_inputs
+
+    refuse_outputs_over_inputs([("--svg", svg_path)], requirement_inputs(files)[0])
     entries = load_requirements(list(files), text_attribute=text_attribute()) if files else []
     by_id = {e.id: e for e in entries}
     period = None

@@ -19,10 +19,13 @@ if TYPE_CHECKING:
 __all__ = ["write_c", "write_c2po"]
 
 
-def write_c(compiled: Sequence[Compiled], output: str | None, split: bool) -> None:
+def write_c(compiled: Sequence[Compiled], output: str | None, split: bool,
+            inputs: tuple[list, list] = ([], [])) -> None:
     """Write the C files of ``compiled`` into the folder ``output`` (required: several
     files) and report the requirements without a monitor on stderr; exit 2 without
-    ``-o``."""
+    ``-o``. ``inputs``: ``(files, folders)`` of the command, none of which a file written
+    may be, nor ``output`` one of the folders (refused before any is written:
+    :func:`fretc.cli.options.refuse_outputs_over_inputs`)."""
     if output is None or output.endswith((".c", ".h")):
         click.echo("error: --emit c writes a header, a source and runner.c: give the folder "
                    "with -o DIR", err=True)
@@ -31,7 +34,11 @@ def write_c(compiled: Sequence[Compiled], output: str | None, split: bool) -> No
 
     from fretc.common.outputs import output_folder, write_file
 
+    from fretc.cli.options import refuse_outputs_over_inputs
+
     files, skipped = emit_c(compiled, split=split)
+    refuse_outputs_over_inputs([("-o", Path(output) / name) for name in files], inputs[0],
+                               [("-o", output)], inputs[1])
     folder = Path(output_folder(output))
     for name, text in files.items():
         path = folder / name

@@ -27,7 +27,8 @@ import click
 
 from fretc.cli.options import (BINDINGS_OPTION, REQUIREMENTS_OPTION, SAFETY_OPTION,
                                SIMULATOR_RAY_OPTION, SPACE_OPTION, FiniteRange, FleetError,
-                               audit_config, shown, statistics_options, with_safety)
+                               audit_config, refuse_folder_over_inputs, shown,
+                               statistics_options, with_safety)
 
 __all__ = ["estimate_cmd"]
 
@@ -98,6 +99,7 @@ def estimate_cmd(ctx: click.Context, requirements: tuple[str, ...], bindings: tu
     from fretc.audit.fleet.ray import RayUnavailable
     from fretc.sim.space import load_space
 
+    refuse_folder_over_inputs(output, requirements, bindings, space_path)
     if os.path.isdir(output) and os.listdir(output):
         raise click.BadParameter(f"{output} is not empty: give a new folder (runs of another "
                                  "campaign would mix with this one's)", param_hint="-o")

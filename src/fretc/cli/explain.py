@@ -48,6 +48,13 @@ def explain_cmd(file: str, ids: tuple[str, ...], output: str | None) -> None:
     if output is not None:
         from fretc.common.outputs import output_folder, write_file
 
+        from fretc.cli.options import refuse_outputs_over_inputs, requirement_inputs
+
+        files, folders = requirement_inputs([file])
+        refuse_outputs_over_inputs(
+            [("-o", Path(output) / f"{stems[c.id]}.svg") for c in compiled
+             if (not ids or c.id in ids) and c.formalization is not None],
+            files, [("-o", output)], folders)
         output_folder(output)
     for c in compiled:
         if ids and c.id not in ids:

@@ -19,8 +19,8 @@ import os
 import click
 
 from fretc.cli.options import (BINDINGS_OPTION, REQUIREMENTS_OPTION, SAFETY_OPTION,
-                               SIMULATOR_RAY_OPTION, SPACE_OPTION, FleetError, shown,
-                               with_safety)
+                               SIMULATOR_RAY_OPTION, SPACE_OPTION, FleetError,
+                               refuse_folder_over_inputs, shown, with_safety)
 
 __all__ = ["falsify_cmd"]
 
@@ -71,6 +71,7 @@ def falsify_cmd(ctx: click.Context, requirements: tuple[str, ...], bindings: tup
 
     from fretc.cli.options import audit_config
 
+    refuse_folder_over_inputs(output, requirements, bindings, space_path)
     if os.path.isdir(output) and os.listdir(output):
         raise click.BadParameter(f"{output} is not empty: give a new folder (runs of another "
                                  "search would mix with this one's)", param_hint="-o")

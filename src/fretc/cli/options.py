@@ -32,7 +32,8 @@ __all__ = ["TEXT_ATTRIBUTE_OPTION", "text_attribute", "BRIDGE_GAPS_OPTION", "bri
            "audit_input_options", "live_input_options", "audit_config", "ray_options",
            "run_audits", "META", "FleetError", "shown", "FiniteRange", "statistics_options",
            "names_of", "io_options", "set_bindings_option", "budget_options", "RequirementSet",
-           "requirement_set", "with_safety", "selection_options", "exit_on_compile_errors"]
+           "requirement_set", "with_safety", "selection_options", "exit_on_compile_errors",
+           "requirement_inputs", "refuse_outputs_over_inputs", "refuse_folder_over_inputs"]
 
 
 class FiniteRange(click.FloatRange):
@@ -624,3 +625,76 @@ def _beside(files: Sequence[str]) -> tuple[Any, str]:
     if with_period:
         return with_period[0][1], f"beside the requirements: {with_period[0][0]}"
     return (found[0][1], f"beside the requirements: {found[0][0]}") if found else (None, "")
+
+
+def requirement_inputs(paths: Sequence[str | os.PathLike[str]], what: str = "the requirement file"
+                       ) -> tuple[list[tuple[str, str]], list[tuple[str, str]]]:
+    """``(files, folders)``: ``(what, file)`` for every requirement file ``paths`` name (a
+    folder's files, as :func:`fretc.fretish.files.requirement_files` reads them; a Doorstop
+    tree, read whole, is one input), and ``("the requirement folder", folder)`` for each
+    other folder among ``paths``: the inputs and input folders that
+    :func:`refuse_outputs_over_inputs` compares a command's outputs with.
+
+    Raises:
+        FretishFileError: a path that is neither a file nor a folder."""
+    from fretc.fretish.files import requirement_files
+
+    files = [(what, f) for f in requirement_files([os.fspath(p) for p in paths])]
+    folders = [("the requirement folder", os.fspath(p)) for p in paths
+               if os.path.isdir(p) and not any(_same_path(p, f) for _, f in files)]
+    return files, folders
+
+
+def refuse_outputs_over_inputs(outputs: Sequence[tuple[str, Any]],
+                               inputs: Sequence[tuple[str, Any]],
+                               out_folders: Sequence[tuple[str, Any]] = (),
+                               in_folders: Sequence[tuple[str, Any]] = ()) -> None:
+    """Refuse, before anything is written, an output that is one of the command's inputs:
+    each output file of ``outputs`` (``(what, path)``, a path None or ``"-"`` skipped) that
+    resolves to an input of ``inputs`` (links followed, a hard link by its inode) or lies
+    inside an input folder read whole (a Doorstop tree, a rosbag2 folder), as
+    :func:`fretc.common.outputs.refuse_replacing_inputs` decides; and each output folder of
+    ``out_folders`` that is itself an input folder of ``in_folders`` (a folder the command
+    reads the files of: ``fretc testgen reqs/ -o reqs``, the written files would sit among
+    the inputs). An output folder inside an input folder is not refused: the files of a
+    folder are read, not its sub-folders.
+
+    Raises:
+        OutputError: the first output that is an input (exit 2 through the command group,
+            naming both)."""
+    from fretc.common.outputs import refuse_replacing_inputs
+
+    refuse_replacing_inputs(outputs, inputs)
+    ins = [(w, os.fspath(p)) for w, p in in_folders if p is not None]
+    for what, folder in out_folders:
+        if folder is not None:
+            refuse_replacing_inputs([(what, folder)],
+                                    [(w, p) for w, p in ins if _same_path(folder, p)][:1])
+
+
+def refuse_folder_over_inputs(output: str, requirements: Sequence[str],
+                              bindings: Sequence[str], space_path: str) -> None:
+    """``fretc estimate`` and ``fretc falsify``: the output folder ``-o`` (which must be new
+    or empty) is none of the inputs (the requirements, ``./requirements`` by default, the
+    binding files, the space) and not a folder of requirements or bindings read.
+
+    Raises:
+        OutputError: it is (:func:`refuse_outputs_over_inputs`)."""
+    named = list(requirements) or (["requirements"] if os.path.isdir("requirements") else [])
+    files, folders = requirement_inputs(named)
+    folders += [("the binding folder", b) for b in bindings if os.path.isdir(b)]
+    refuse_outputs_over_inputs(
+        [("-o", output)], files + [("the binding file", b) for b in bindings
+                                   if not os.path.isdir(b)] + [("--space", space_path)],
+        [("-o", output)], folders)
+
+
+def _same_path(a: str | os.PathLike[str], b: str | os.PathLike[str]) -> bool:
+    """Whether ``a`` and ``b`` name one file or folder: equal once resolved (links followed),
+    or one by device and inode when both exist."""
+    if os.path.realpath(a) == os.path.realpath(b):
+        return True
+    try:
+        return os.path.samefile(a, b)
+    except OSError:
+        return False

@@ -135,7 +135,8 @@ def shield_cmd(files: tuple[str, ...], inputs: str | None, outputs: str | None,
         code = max(code, _timing(shield, node, [*compiled, *assumed], bindings_file))
     if forms:
         assert out_dir is not None  # refused above without -o
-        _write(shield, forms, out_dir, bindings, bindings_file, compiled, node)
+        _write(shield, forms, out_dir, bindings, bindings_file, compiled, node,
+               (files, assume))
     sys.exit(code)
 
 
@@ -164,14 +165,28 @@ def _read(files: Sequence[str], assume: Sequence[str], bindings_file: str | None
 
 def _write(shield: Any, forms: Sequence[str], out_dir: str, bindings: Any,
            bindings_file: str | None, compiled: Sequence[Any],
-           node: tuple[Any, int] | None) -> None:
-    """Write the forms into ``out_dir`` and name each file written.
+           node: tuple[Any, int] | None,
+           read: tuple[Sequence[str], Sequence[str]] = ((), ())) -> None:
+    """Write the forms into ``out_dir`` and name each file written. ``read``: the
+    requirement paths and ``--assume``'s: no file written is one of them, nor the binding
+    file, and ``out_dir`` is not a folder of them (refused before any file is written).
 
     Raises:
-        click.UsageError: a folder that cannot be written."""
+        click.UsageError: a folder that cannot be written.
+        OutputError: a file written would be an input
+            (:func:`fretc.cli.options.refuse_outputs_over_inputs`)."""
     from fretc.common.errors import FretcError
-    from fretc.shield.emit import write_forms
+    from fretc.shield.emit import render_forms, write_forms
 
+    from fretc.cli.options import refuse_outputs_over_inputs, requirement_inputs
+
+    req_files, req_folders = requirement_inputs(read[0])
+    assumed, assumed_folders = requirement_inputs(read[1], "the assumption file (--assume)")
+    names = render_forms(shield, forms, bindings=bindings, bindings_file=bindings_file,
+                         compiled=compiled, node=node)  # (only their names: write_forms writes)
+    refuse_outputs_over_inputs([("-o", Path(out_dir) / n) for n in names],
+                               req_files + assumed + [("the binding file", bindings_file)],
+                               [("-o", out_dir)], req_folders + assumed_folders)
     try:
         written = write_forms(shield, forms, Path(out_dir), bindings=bindings,
                               bindings_file=bindings_file, compiled=compiled, node=node)

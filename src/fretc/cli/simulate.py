@@ -56,6 +56,8 @@ def simulate_cmd(file: str, trace: str, ids: tuple[str, ...], output: str | None
         click.echo(_shown(str(c.error)), err=True)
     if failed:
         sys.exit(2)
+    _refuse_replacing_inputs(file, trace, output, json_path,
+                             [c.id for c in chosen if c.formalization is not None])
     data = read_trace(trace)
     n = len(next(iter(data.values()), []))
     sims = [simulate(c, data) for c in chosen if c.formalization is not None]
@@ -64,3 +66,25 @@ def simulate_cmd(file: str, trace: str, ids: tuple[str, ...], output: str | None
         click.echo(_shown(f"wrote {p}"), err=True)
     first = [s.ft[0] for s in sims if s.ft]
     sys.exit(1 if False in first else 3 if None in first else 0)
+
+
+def _refuse_replacing_inputs(file: str, trace: str, output: str | None, json_path: str | None,
+                             ids: list[str]) -> None:
+    """No file simulate writes (``-o DIR``'s SVGs, as :func:`fretc.reports.simulation.
+    write_outputs` names them, and simulation.html; ``--json``) is one of its inputs (the
+    requirement files, the trace), and ``-o`` is not the folder of requirements read.
+
+    Raises:
+        OutputError: one is (:func:`fretc.cli.options.refuse_outputs_over_inputs`)."""
+    from pathlib import Path
+
+    from fretc.common.textsafe import file_stems
+
+    from fretc.cli.options import refuse_outputs_over_inputs, requirement_inputs
+
+    files, folders = requirement_inputs([file])
+    outputs: list[tuple[str, Path | str | None]] = [("--json", json_path)]
+    if output is not None:
+        outputs += [("-o", Path(output) / f"{s}.svg") for s in file_stems(ids).values()]
+        outputs.append(("-o", Path(output) / "simulation.html"))
+    refuse_outputs_over_inputs(outputs, files + [("the trace", trace)], [("-o", output)], folders)

@@ -72,6 +72,7 @@ def testgen_cmd(files: tuple[str, ...], out_dir: str, with_pytest: bool, binding
     exit_on_compile_errors(files, compiled)
     bindings = rs.bindings
     gen = generate(compiled)
+    _refuse_replacing_inputs(files, bindings_file, out_dir, len(gen.tests), with_pytest)
     if bindings is not None:
         from fretc.testing.mcap_log import bind_tests
 
@@ -114,3 +115,27 @@ def testgen_cmd(files: tuple[str, ...], out_dir: str, with_pytest: bool, binding
             sys.exit(1)
     sys.exit(3 if doc["unknown"] else 0)
 
+
+
+def _refuse_replacing_inputs(files: tuple[str, ...], bindings_file: str | None, out_dir: str,
+                             tests: int, with_pytest: bool) -> None:
+    """No file testgen writes into ``out_dir`` (T01.csv, T01.mcap ... as
+    :func:`fretc.testing.generate.write_tests` and :func:`fretc.testing.mcap_log.bind_tests`
+    name them, tests.json, the pytest files) is one of its inputs (the requirement files, the
+    binding file), and ``out_dir`` is not the folder of requirements read; checked before
+    any is written.
+
+    Raises:
+        OutputError: one is (:func:`fretc.cli.options.refuse_outputs_over_inputs`)."""
+    from fretc.cli.options import refuse_outputs_over_inputs, requirement_inputs
+
+    names = [f"T{k:02d}{s}" for k in range(1, tests + 1) for s in (".csv", ".mcap")]
+    names.append("tests.json")
+    if with_pytest:
+        from fretc.testing.pytest_file import PYTEST_FILE, PYTEST_INI
+
+        names += [PYTEST_FILE, PYTEST_INI]
+    req_files, req_folders = requirement_inputs(files)
+    refuse_outputs_over_inputs([("-o", Path(out_dir) / n) for n in names],
+                               req_files + [("the binding file", bindings_file)],
+                               [("-o", out_dir)], req_folders)

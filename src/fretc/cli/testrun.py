@@ -71,6 +71,8 @@ def testrun_cmd(folder: str | Path, command: str, bindings: str | None, logs_dir
         click.echo(shown(f"error: {why}"), err=True)
     if absent:
         sys.exit(2)
+    chosen = [t for t in tests if not only or t["id"] in only]
+    _refuse_replacing_inputs(folder, doc, chosen, bindings, logs_dir, json_path)
     from fretc.common.outputs import sub_folder
 
     # the default runs/ is a folder of fretc's own: a link planted there is refused (exit 2)
@@ -101,3 +103,34 @@ def _json(o) -> dict:
             "not_exercised": [{"requirement": r, "obligation": b} for r, b in o.not_exercised],
             "exercised": o.exercised, "log": o.log, "error": o.error,
             "generated_for": o.target}
+
+
+def _refuse_replacing_inputs(folder: Path, doc: dict, tests: list, bindings: str | None,
+                             logs_dir: str | None, json_path: str | None) -> None:
+    """No file testrun writes (each test's log and audit in ``--logs``, named as
+    :func:`fretc.testing.testrun.run_test` names them; ``--json``) is one of its inputs (the
+    folder's tests.json, the tests' traces, the requirement files and the binding file the
+    tests are audited with), and ``--logs`` is not the test folder; checked before any test
+    runs.
+
+    Raises:
+        OutputError: one is (:func:`fretc.cli.options.refuse_outputs_over_inputs`)."""
+    import os
+
+    from fretc.testing.tests_json import file_name
+
+    from fretc.cli.options import refuse_outputs_over_inputs, requirement_inputs
+
+    work = Path(logs_dir) if logs_dir else folder / "runs"
+    outputs: list[tuple[str, Path | str | None]] = [("--json", json_path)]
+    for t in tests:
+        outputs += [("--logs", work / file_name(t["id"], ".mcap")),
+                    ("--logs", work / file_name(t["id"], ".audit.json"))]
+    named = [r for r in doc.get("requirements", []) if isinstance(r, str) and os.path.exists(r)]
+    files, folders = requirement_inputs(named)
+    binding = bindings or doc.get("bindings")
+    inputs = ([("the tests' file", folder / "tests.json")]
+              + [("the trace", folder / t["trace"]) for t in tests] + files
+              + [("the binding file", binding if isinstance(binding, str) else None)])
+    refuse_outputs_over_inputs(outputs, inputs, [("--logs", logs_dir)],
+                               [("the test folder", folder), *folders])

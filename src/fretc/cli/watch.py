@@ -33,7 +33,7 @@ import threading
 import time
 
 import click
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 from fretc.common.units import format_offset
 
@@ -242,6 +242,7 @@ def watch_cmd(ctx: click.Context, url: str, requirements: tuple[str, ...],
 
     try:
         plan = load_plan(config)
+        _refuse_replacing_inputs(plan, record, json_path, dds_config or zenoh_config)
         w = Watch(plan, WatchOptions(url=url, duration=duration, wait=wait,
                                      connect_timeout=connect_timeout, record=record,
                                      until_idle=until_idle, types=topic_types or None,
@@ -265,6 +266,22 @@ def watch_cmd(ctx: click.Context, url: str, requirements: tuple[str, ...],
         diagnostics[0].finish(la)
         getattr(w.client, "close", lambda: None)()
     ctx.exit(_report(w, la, w.plan, input_errors, allow_partial, jsonl, record, json_path))
+
+
+def _refuse_replacing_inputs(plan: Any, record: str | None, json_path: str | None,
+                             config_file: str | None) -> None:
+    """Neither ``--record`` nor ``--json`` is one of the watch's inputs (its requirement
+    files, binding files, the transport's configuration file), checked before it connects.
+
+    Raises:
+        OutputError: one is (:func:`fretc.cli.options.refuse_outputs_over_inputs`)."""
+    from fretc.cli.options import refuse_outputs_over_inputs, requirement_inputs
+
+    files, _ = requirement_inputs(list(plan.config.requirements))
+    refuse_outputs_over_inputs(
+        [("--record", record), ("--json", json_path)],
+        files + [("the binding file", f) for f in plan.binding_files]
+        + [("the transport's configuration", config_file)])
 
 
 def connection_line(e: WatchEvent, connect_timeout: float | None) -> str | None:
