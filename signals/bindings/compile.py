@@ -247,6 +247,8 @@ def _call(node: FuncCall, ops: Ops, extractors: dict[Field, Evaluator],
         return _tf(node)
     if func in ("delta", "timedelta", "derivative", "unchanged"):
         return _stateful(node, ops, consts)
+    if func == "sector":
+        return _sector(node, ops, extractors, consts)
     args = [compile_node(a, ops, extractors, consts) for a in node.args]
     if func == "sqrt":
         a0 = args[0]
@@ -342,6 +344,47 @@ def _stateful(node: FuncCall, ops: Ops, consts: dict[str, Any]) -> Evaluator:
             return d
         return d / dt if dt != 0 else math.nan
     return stateful
+
+
+def _sector(node: FuncCall, ops: Ops, extractors: dict[Field, Evaluator],
+            consts: dict[str, Any]) -> Evaluator:
+    """``sector(/scan.ranges, lo, hi)``: the LaserScan's ranges (REP 117's validity mask)
+    with only the beams whose angle lies in ``[lo, hi]`` (radians, REP 103: 0 ahead,
+    counter-clockwise) kept valid; a beam's angle is ``angle_min + i * angle_increment`` in
+    the LiDAR's own frame, wrapped to ``[-pi, pi)``, and ``lo > hi`` is a sector through
+    ``pi`` (behind: ``sector(/scan.ranges, 2.356, -2.356)``). So one binding means the same
+    sector on a LiDAR of any beam count and field of view (a slice by beam index,
+    ``[270:451]``, read nothing on a LiDAR of fewer beams: no valid return, a clear path).
+    Tick by tick (message by message inside a reduction): the vectorized evaluator raises."""
+    ranges_node = node.args[0]
+    assert isinstance(ranges_node, Field)  # (expression's check)
+    one = Ops(False, ops.nan_unread, ops.inf_unread)
+    ranges = compile_node(ranges_node, one, extractors, consts)
+    amin = compile_node(node.args[3], one, extractors, consts)
+    ainc = compile_node(node.args[4], one, extractors, consts)
+    lo_of = compile_node(node.args[1], one, extractors, consts)
+    hi_of = compile_node(node.args[2], one, extractors, consts)
+
+    def sector(st: Any) -> Any:
+        if ops.vec or not isinstance(st, EvalState):
+            raise EvalError(node, "sector() is evaluated message by message")
+        r = ranges(st)
+        if not isinstance(r, Valid):
+            raise EvalError(node, "sector() takes a LaserScan's ranges")
+        start, step = float(amin(st)), float(ainc(st))
+        lo, hi = float(lo_of(st)), float(hi_of(st))
+        n = r.data.shape[-1]
+        angles = np.remainder(start + np.arange(n) * step + math.pi, 2 * math.pi) - math.pi
+        lo_w = math.remainder(lo, 2 * math.pi)
+        hi_w = math.remainder(hi, 2 * math.pi)
+        inside = ((angles >= lo_w) & (angles <= hi_w)) if lo_w <= hi_w else (
+            (angles >= lo_w) | (angles <= hi_w))
+        mask = inside if r.mask is None else (r.mask & inside)
+        # (beams outside the sector are neither valid nor invalid measurements: +inf, "no
+        # return", so that invalid() and min() of the sector count only its own beams)
+        data = np.where(inside, r.data, np.inf)
+        return Valid(data, mask)
+    return sector
 
 
 def _same_value(a: Any, b: Any) -> bool:

@@ -186,7 +186,9 @@ class FuncCall(Expr):
     args: tuple[Expr, ...]
 
 
-#: The functions of the language: name -> (min args, max args or None). ``joint`` is
+#: The functions of the language: name -> (min args, max args or None). ``sector`` is
+#: written with three (``sector(/scan.ranges, lo, hi)``; the scan's ``angle_min`` and
+#: ``angle_increment`` are added as the fourth and fifth, so that they are read). ``joint`` is
 #: written with two (``joint(/joint_states.position, "wheel")``; the ``name`` array beside
 #: the first is added as a third), ``tf`` as ``tf("map", "base_link").x`` (the component
 #: is its third).
@@ -197,7 +199,7 @@ FUNCS = {
     "any_of_messages": (1, 1), "all_of_messages": (1, 1), "count_of_messages": (1, 1),
     "min_of_messages": (1, 1), "max_of_messages": (1, 1),
     "sqrt": (1, 1), "delta": (1, 1), "timedelta": (1, 1), "derivative": (1, 1),
-    "unchanged": (1, 1),
+    "unchanged": (1, 1), "sector": (5, 5),
 }
 #: Foxglove's message path modifiers a field may end in (``/odom.x@derivative``).
 MODIFIERS = ("derivative", "delta", "timedelta", "abs", "negative", "sqrt", "rad2deg",
@@ -267,7 +269,8 @@ def unparse(node: Expr) -> str:
         if node.func == "tf":
             a = node.args
             return f"tf({unparse(a[0])}, {unparse(a[1])}).{a[2].value}"  # type: ignore
-        args = node.args[:2] if node.func == "joint" else node.args
+        args = (node.args[:2] if node.func == "joint" else node.args[:3]
+                if node.func == "sector" else node.args)
         return f"{node.func}({', '.join(unparse(a) for a in args)})"
     raise TypeError(type(node).__name__)
 
@@ -429,6 +432,13 @@ def _check_call(node: FuncCall, where: ExprLocation, topics: set[str]) -> None:
                               f"/odom.twist.twist.linear.x@{node.func} or "
                               f"{node.func}(joint(/joint_states.position, \"wheel\"))",
                               node.col)
+    if node.func == "sector":
+        ranges = node.args[0]
+        if not (isinstance(ranges, Field) and ranges.path and ranges.path[-1] == "ranges"
+                and not ranges.multi and not ranges.filters):
+            raise where.error("sector() takes a LaserScan's ranges and the sector's ends in "
+                              "radians (REP 103: 0 ahead, counter-clockwise), e.g. "
+                              "min(sector(/scan.ranges, -0.785, 0.785))", node.col)
     if node.func in ("waiting", "goal_waiting"):  # a service's or an action's topic (parse.py)
         topics.add(node.args[0].topic)  # type: ignore[attr-defined]
         return

@@ -220,6 +220,8 @@ class _ToExpr(Transformer):
             return _service_call(str(name), args, self.where, name.column)
         if name == "joint":
             args = _joint_args(args, self.where, name.column)
+        if name == "sector":
+            args = _sector_args(args, self.where, name.column)
         return FuncCall(name.column, str(name), args)
 
     def call_member(self, meta, kids):
@@ -311,6 +313,23 @@ def _joint_args(args: tuple, where: ExprLocation, col: int) -> tuple:
                           'joint(/joint_states.position, "wheel_left_joint")', col)
     f = args[0]
     return (f, args[1], Field(f.col, f.topic, f.path[:-1] + ("name",)))
+
+
+def _sector_args(args: tuple, where: ExprLocation, col: int) -> tuple:
+    """``sector(/scan.ranges, lo, hi)`` -> (the ranges field, lo, hi, the scan's
+    ``angle_min``, its ``angle_increment``: read with the ranges).
+
+    Raises:
+        BindingError: not a LaserScan's ``ranges`` field and two ends, at ``col``."""
+    f = args[0] if args else None
+    if (len(args) != 3 or not isinstance(f, Field) or not f.path or f.path[-1] != "ranges"
+            or f.multi or f.filters):
+        raise where.error("sector() takes a LaserScan's ranges and the sector's ends in "
+                          "radians (REP 103: 0 ahead, counter-clockwise), e.g. "
+                          "min(sector(/scan.ranges, -0.785, 0.785))", col)
+    base = f.path[:-1]
+    return (f, args[1], args[2], Field(f.col, f.topic, base + ("angle_min",)),
+            Field(f.col, f.topic, base + ("angle_increment",)))
 
 
 def _syntax_error(expr: str, exc: UnexpectedInput, where: ExprLocation) -> BindingError:

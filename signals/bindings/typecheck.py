@@ -234,6 +234,18 @@ class _TypeChecker:
         if f == "unchanged":
             self.type(node.args[0])
             return "bool"
+        if f == "sector":
+            ranges = node.args[0]
+            if not (isinstance(ranges, Field) and ranges.path
+                    and ranges.path[-1] == "ranges" and not ranges.multi):
+                raise self.where.error("type error: sector() takes a LaserScan's ranges "
+                                       "(sector(/scan.ranges, -0.785, 0.785)), not "
+                                       f"{ranges.text() if isinstance(ranges, Field) else 'that'}",
+                                       node.col)
+            for a in node.args[1:3]:
+                self.need(a, self.type(a), ("number",), "sector() takes its ends in radians",
+                          node)
+            return "array_number"
         if f in ("delta", "derivative", "sqrt"):
             t = self.type(node.args[0])
             self.need(node.args[0], t, ("number",), f"{f}() takes a number", node)
