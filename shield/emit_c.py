@@ -7,12 +7,35 @@ Files ``<name>_shield.h`` and ``<name>_shield.c`` (prefix ``P`` = the name), and
 
 * ``P_shield_inputs`` / ``P_shield_outputs``: one field per FRET variable a requirement reads
   (``bool``, or ``double`` for one compared with numbers); a declared variable no
-  requirement reads has no field (the caller passes such an output on unchanged); ``P_shield_state``: the monitors' state bits and the correction's scratch;
+  requirement reads has no field (the caller passes such an output on unchanged);
+  ``P_shield_state``: per machine its belief (the monitors' state bits of each state it may
+  be in), the step's scratch and the memo;
 * ``P_shield_init(s)``; ``P_shield_step(s, inputs, proposed, corrected)``: the rule of
-  :mod:`fretc.shield.machine` (as :class:`fretc.shield.runtime.ShieldRuntime`, compared on
-  random runs in the tests); returns 1 when the proposal was changed (``s->reasons``: bit
-  ``r`` set when ``P_SHIELD_REQUIREMENT_IDS[r]`` forced it), 0 when not, -1 when an input or
-  a proposed number is NaN (no decision: ``corrected`` and the state untouched).
+  :mod:`fretc.shield.machine` (as :class:`fretc.shield.runtime.ShieldRuntime`, compared tick
+  by tick on random runs in the tests, NaN inputs included); returns 1 when the proposal was
+  changed (``s->reasons``: bit ``r`` set when ``P_SHIELD_REQUIREMENT_IDS[r]`` forced it), 0
+  when not, and -1 only when a machine no longer knows its state and the shield has no
+  fallback (no outputs: ``corrected`` untouched). ``s->fault`` says what could not be read,
+  the first that holds: 1 an input, 3 a machine that no longer knows its state, 2 a proposal.
+
+**An input number that is NaN is any value**, as in the Python form (its module docstring):
+each machine keeps a *belief*, the states it may be in, in an array of fixed capacity in the
+state (:data:`C_BELIEF_LIMIT` states, fewer when the state bits have fewer; sorted as the
+Python form sorts its tuples, ``belief[0]`` the state while it knows it), a count and a lost
+flag. A tick with a NaN input (or a belief of several states) is decided for every case: each
+valuation of the input atoms that read the NaN inputs (at most 2^k, ``k`` at most
+:data:`C_FREE_LIMIT`), in binary order, that ``env_ok`` allows, with each state of the
+belief; the proposal kept when ``safe`` holds in every case, else the cheapest of the cases'
+own corrections and the fallback's atoms that is safe in every case (the first met of those
+as cheap: Python's ``min`` over the candidates in its order), the reasons those of
+``decide_cases``, the next belief every state reached, the assumptions broken only when
+broken in every case. Past :data:`C_BELIEF_LIMIT` states or :data:`C_CASES_LIMIT` cases (the
+Python form's bounds), past ``C_FREE_LIMIT`` free atoms (a bound the Python form does not
+have: a machine with more than 16 input atoms reading NaN inputs at one tick is lost in C,
+where the Python form may still decide it), or when no candidate is safe in every case, the machine is
+lost: it gives the fallback's outputs until ``P_shield_init`` (none without a fallback: -1).
+Every buffer of the cases is in the state (no allocation); a step takes at most
+``C_CASES_LIMIT`` corrections and as many walks of each candidate: constant time.
 
 A comparison of several variables (:mod:`fretc.shield.predicates`) is computed in doubles
 as the Python runtime computes it (:func:`c_term`); when an override changes an atom of an
@@ -20,7 +43,9 @@ output cluster, the cluster's variables take the numbers recorded for the new va
 table searched linearly: constant time and memory). Each machine whose variables fit in 64
 bits keeps a memo of its decisions in the state (:data:`MEMO_SLOTS` direct-mapped slots:
 correction, reasons, next state), as the Python form caches its corrections: a tick met
-before costs a lookup, a miss what the step costs without it.
+before costs a lookup, a miss what the step costs without it. The memo is keyed by one state:
+a machine whose belief holds several states, or one of whose input atoms reads a NaN input,
+decides without it (and does not fill it).
 """
 
 from __future__ import annotations
@@ -35,6 +60,7 @@ from typing import Any
 from fretc.compiler.c_step import c_string
 from fretc.shield.build import Shield
 from fretc.shield.emit_python import tables
+from fretc.shield.runtime import BELIEF_LIMIT, CASES_LIMIT
 
 __all__ = ["render_c", "c_name", "c_names", "c_term"]
 
@@ -157,6 +183,13 @@ class _CMachine:
     atom_vars: list[list[int]]
     #: the index of the machine's first assumption in the state's ``broken``
     first_assumption: int = 0
+    #: per input atom, the indices (in the inputs struct's order) of the compared numbers it
+    #: reads: the atom is free (any value) when one of them is NaN
+    in_vars: tuple[tuple[int, ...], ...] = ()
+    #: the output variables the machine's atoms read, in the outputs struct's order
+    out_vars: tuple[str, ...] = ()
+    #: the fallback's value of each output atom (None: the shield has no fallback)
+    fallback_atoms: tuple[int, ...] | None = None
 
     @property
     def n_in(self) -> int:
@@ -179,15 +212,39 @@ class _CMachine:
         return self.n_in + self.n_out + len(self.t["init"])
 
     @property
+    def n_free(self) -> int:
+        """Input atoms that can be free (read a compared input number)."""
+        return sum(1 for x in self.in_vars if x)
+
+    @property
+    def free_cap(self) -> int:
+        """The most free input atoms a tick enumerates (:data:`C_FREE_LIMIT`)."""
+        return min(self.n_free, C_FREE_LIMIT)
+
+    @property
+    def belief_cap(self) -> int:
+        """The belief array's capacity: :data:`C_BELIEF_LIMIT`, or fewer when the state bits
+        have fewer states (the belief can never hold more)."""
+        return min(C_BELIEF_LIMIT, 2 ** len(self.t["init"]))
+
+    @property
+    def case_cap(self) -> int:
+        """The valuations of the free input atoms a tick keeps (at most
+        :data:`C_CASES_LIMIT`)."""
+        return min(2 ** self.free_cap, C_CASES_LIMIT)
+
+    @property
     def memo(self) -> bool:
         """Whether the machine keeps a memo of its corrections (:data:`MEMO_SLOTS` slots,
         keyed by the node table's variables packed in 64 bits: only when they fit)."""
         return 0 < self.n_vars <= 64
 
 
-def _machines(shield: Shield) -> list[_CMachine]:
+def _machines(shield: Shield, compared: set[str]) -> list[_CMachine]:
     out, first, first_a = [], 0, 0
     fields = [v for v in shield.outputs if v in shield.read]  # (the outputs struct's)
+    in_fields = [v for v in shield.inputs if v in shield.read]  # (the inputs struct's)
+    numeric_in = [v for v in in_fields if v in shield.numbers and v in compared]
     for k, t in enumerate(tables(shield)["machines"]):
         numeric = []
         clustered = {v for c in t["clusters"] for v in c["variables"]}
@@ -212,7 +269,16 @@ def _machines(shield: Shield) -> list[_CMachine]:
         atom_vars = [sorted(fields.index(x) for x in (_term_variables(c) if op == "pred"
                                                       else {var}) if x in fields)
                      for var, op, c in t["outputs"]]
-        out.append(_CMachine(k, t, first, numeric, groups, clusters, atom_vars, first_a))
+        in_vars = tuple(tuple(sorted(in_fields.index(x) for x in (
+            _term_variables(c) if op == "pred" else {var} if op is not None else set())
+            if x in numeric_in)) for var, op, c in t["inputs"])
+        reads = {x for var, op, c in t["outputs"]
+                 for x in (_term_variables(c) if op == "pred" else {var})}
+        fb = shield.fallback
+        out.append(_CMachine(k, t, first, numeric, groups, clusters, atom_vars, first_a,
+                             in_vars, tuple(v for v in fields if v in reads),
+                             tuple(int(b) for b in fb["atoms"][k]) if fb is not None
+                             else None))
         first += len(t["requirements"])
         first_a += len(t["assumptions"])
     return out
@@ -230,6 +296,19 @@ def _term_variables(t: tuple[Any, ...]) -> set[str]:
 
 MEMO_SLOTS = 256
 
+#: the most states a machine's belief holds in C: the Python form's
+#: :data:`fretc.shield.runtime.BELIEF_LIMIT`, so that both forms lose a machine's state at
+#: the same tick
+C_BELIEF_LIMIT = BELIEF_LIMIT
+#: the most cases (a valuation of the free input atoms, then a state of the belief) a machine
+#: decides one tick for: the Python form's :data:`fretc.shield.runtime.CASES_LIMIT`
+C_CASES_LIMIT = CASES_LIMIT
+#: the most input atoms a tick's unread numbers may leave free in one machine: their 2^k
+#: valuations are each tried against ``env_ok`` (65,536 BDD walks at most); a machine whose
+#: inputs can leave more free is lost at a tick that does (the Python form, which has no such
+#: bound, may still decide it when few of those valuations are real)
+C_FREE_LIMIT = 16
+
 
 def render_c(shield: Shield, base: str) -> dict[str, str]:
     """``{file name: text}`` of the C form (module docstring); ``base`` the C prefix."""
@@ -243,7 +322,6 @@ def render_c(shield: Shield, base: str) -> dict[str, str]:
     env.filters["double"] = _double
     env.filters["cterm"] = lambda t, struct: c_term(t, struct, names)
     t = tables(shield)
-    machines = _machines(shield)
     # (the numbers the machines compare: a NaN there has no truth value, the runtime's
     # ValueError; a NaN elsewhere, a monitored requirement's, passes as in Python)
     compared: set[str] = set()
@@ -253,6 +331,7 @@ def render_c(shield: Shield, base: str) -> dict[str, str]:
                 compared |= _term_variables(c)
             elif op is not None:
                 compared.add(var)
+    machines = _machines(shield, compared)
     outputs = [(v, v in shield.numbers) for v in shield.outputs if v in shield.read]
     ctx = {"p": base, "P": base.upper(), "shield": shield, "t": t, "machines": machines,
            "compared": compared,
@@ -265,7 +344,8 @@ def render_c(shield: Shield, base: str) -> dict[str, str]:
                               else "", "\n"]),
            "requirements": [r for m in t["machines"] for r in m["requirements"]],
            "assumptions": [a for m in t["machines"] for a in m["assumptions"]],
-           "op_map": _C_OPS, "memo_slots": MEMO_SLOTS,
+           "op_map": _C_OPS, "memo_slots": MEMO_SLOTS, "belief_limit": C_BELIEF_LIMIT,
+           "cases_limit": C_CASES_LIMIT, "free_limit": C_FREE_LIMIT,
            "numeric": any(m.numeric_outputs for m in machines),
            "whole": any(v in m.t["integers"] for m in machines for v, _s, _i in m.numeric_outputs),
            "max_atoms": max([1] + [len(i) for m in machines for _v, _s, i in m.numeric_outputs])}

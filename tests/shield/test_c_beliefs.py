@@ -1,0 +1,155 @@
+"""The C form decides a tick whose input number is NaN as the Python form does: that input
+is any value, each machine keeping a belief (the states it may be in, in arrays of fixed
+capacity in C), and a machine that no longer knows its state gives the fallback's outputs
+(none without one: the step returns -1, the runner's cells are empty) until reset.
+
+Random requirement sets over the inputs ``a`` (a boolean), ``d`` and ``e`` (numbers,
+compared with constants and with each other) and the outputs ``x``, ``y`` (booleans) and
+``v`` (a number); random runs in which ``d`` and ``e`` are often NaN, on several ticks in a
+row and at once (the belief grows and meets again); the C runner's row equals the Python
+form's decision at every tick: outputs, override, reasons and fault.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import math
+import subprocess
+import tempfile
+from pathlib import Path
+
+from hypothesis import HealthCheck, assume, given, settings
+from hypothesis import strategies as st
+
+from fretc.shield.build import build_shield
+from fretc.shield.emit_c import render_c
+from fretc.shield.emit_python import tables
+from fretc.shield.plan import ShieldError
+from fretc.shield.runtime import ShieldRuntime
+
+from _c_monitors import build, needs_cc, write
+from _gen import compile_text
+
+INPUTS = ["a", "d", "e"]
+OUTPUTS = ["x", "y", "v"]
+CONDITIONS = ["", "whenever a ", "upon a ", "whenever d > 1 ", "upon d <= 0 ", "whenever e > 2 ",
+              "upon d < e ", "whenever d + e > 3 ", "upon a & e <= 1 "]
+RESPONSES = ["x", "!x", "x & y", "x | y", "v <= 1", "v > 2", "!y -> x", "y", "v = 2"]
+TIMINGS = ["immediately ", "at the next timepoint ", "within 2 ticks ", "within 3 ticks ",
+           "for 2 ticks ", "always ", "never ", "until a "]
+
+
+@st.composite
+def requirement_sets(draw) -> str:
+    lines = []
+    for k in range(draw(st.integers(1, 3))):
+        lines.append(f"R{k + 1}: {draw(st.sampled_from(CONDITIONS))}sw shall "
+                     f"{draw(st.sampled_from(TIMINGS))}satisfy "
+                     f"{draw(st.sampled_from(RESPONSES))}")
+    return "\n".join(lines) + "\n"
+
+
+NUMBERS = [-1.0, 0.0, 0.5, 1.0, 2.0, 3.0, math.inf]
+
+
+@st.composite
+def runs(draw, length: int = 60) -> list[tuple[dict, dict]]:
+    """Ticks of inputs (``d``, ``e`` NaN about a third of the time each) and proposals
+    (``v`` now and then NaN or infinite)."""
+    out = []
+    for _ in range(draw(st.integers(1, length))):
+        ins = {"a": draw(st.booleans()),
+               "d": draw(st.sampled_from([math.nan, math.nan, math.nan, *NUMBERS])),
+               "e": draw(st.sampled_from([math.nan, math.nan, math.nan, *NUMBERS]))}
+        prop = {"x": draw(st.booleans()), "y": draw(st.booleans()),
+                "v": draw(st.sampled_from([0.0, 0.5, 1.0, 2.0, 2.5, 3.0, math.nan, math.inf]))}
+        out.append((ins, prop))
+    return out
+
+
+def fault_kind(d) -> str:
+    """The C runner's ``fault`` column for the Python form's decision ``d`` (the first of its
+    notes)."""
+    if not d.fault:
+        return ""
+    if d.fault.startswith("input "):
+        return "input"
+    return "lost" if d.lost else d.fault.split(" ")[0]
+
+
+def _cell(x) -> str:
+    return ("true" if x else "false") if isinstance(x, bool) else repr(float(x))
+
+
+def run_c(shield, rows: list[tuple[dict, dict]]) -> list[dict]:
+    """The C runner's rows for ``rows`` (inputs, proposal: the variables of the first)."""
+    with tempfile.TemporaryDirectory() as tmp:
+        folder = Path(tmp)
+        write(render_c(shield, "t"), folder)
+        exe = build(folder, ["t_shield.c", "t_shield_run.c"], "run")
+        ins_vars, outs_vars = list(rows[0][0]), list(rows[0][1])
+        text = io.StringIO()
+        w = csv.writer(text, lineterminator="\n")
+        w.writerow(ins_vars + outs_vars)
+        for ins, prop in rows:
+            w.writerow([_cell(ins[v]) for v in ins_vars] + [_cell(prop[v]) for v in outs_vars])
+        got = subprocess.run([str(exe)], input=text.getvalue(), capture_output=True,
+                             text=True, timeout=60)
+    assert got.returncode == 0 and not got.stderr, got.stderr
+    return list(csv.DictReader(io.StringIO(got.stdout)))
+
+
+def assert_alike(shield, rows: list[tuple[dict, dict]]) -> list:
+    """The Python form's decisions on ``rows``, each equal to the C runner's row."""
+    rt = ShieldRuntime(tables(shield))
+    decisions = []
+    for (ins, prop), c in zip(rows, run_c(shield, rows), strict=True):
+        d = rt.step(ins, prop)
+        decisions.append(d)
+        assert c["fault"] == fault_kind(d), (ins, prop, d, c)
+        assert c["overridden"] == str(int(d.overridden)), (ins, prop, d, c)
+        assert set(filter(None, c["reasons"].split("|"))) == set(d.reasons), (d, c)
+        for v, x in prop.items():
+            if v not in shield.read:
+                continue
+            if v not in d.outputs:
+                assert c[v] == "", (v, d, c)
+            elif isinstance(x, bool):
+                assert c[v] == str(int(d.outputs[v])), (v, ins, prop, d, c)
+            else:
+                assert float(c[v]) == d.outputs[v], (v, ins, prop, d, c)
+    return decisions
+
+
+@settings(max_examples=6, deadline=None,
+          suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
+@given(text=requirement_sets(), rows=runs())
+def test_c_and_python_decide_alike_on_nan_inputs(text, rows):
+    needs_cc()
+    with tempfile.TemporaryDirectory() as tmp:
+        compiled = compile_text(text, Path(tmp))
+        try:
+            shield = build_shield(compiled, INPUTS, OUTPUTS, fork=False)
+        except ShieldError:
+            assume(False)
+            raise
+    assert_alike(shield, rows)
+
+
+def test_a_machine_with_no_outputs_safe_for_every_value_is_lost_in_both_forms(tmp_path):
+    """``o`` must be ``x > 1``: a NaN ``x`` leaves no ``o`` safe in every case, and the
+    shield has no fallback: from that tick on the machine of F3 and F4 gives no outputs (C:
+    -1, empty cells) while F1's machine still decides (its reason at tick 2 is given)."""
+    needs_cc()
+    compiled = compile_text("F1: upon a ctrl shall within 2 ticks satisfy p\n"
+                            "F3: whenever x > 1 ctrl shall immediately satisfy o\n"
+                            "F4: whenever x <= 1 ctrl shall immediately satisfy !o\n", tmp_path)
+    shield = build_shield(compiled, ["a", "x"], ["o", "p"], fork=False)
+    assert shield.fallback is None
+    rows = [({"a": k == 0, "x": math.nan if k in (2, 5) else 0.0},
+             {"o": False, "p": False}) for k in range(7)]
+    decisions = assert_alike(shield, rows)
+    assert [d.outputs for d in decisions[:2]] == [{"o": False, "p": False}] * 2
+    assert all(d.outputs == {} and d.lost == ("F3", "F4") for d in decisions[2:])
+    assert decisions[2].reasons == ("F1",)
