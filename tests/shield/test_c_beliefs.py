@@ -15,6 +15,7 @@ from __future__ import annotations
 import csv
 import io
 import math
+import random
 import subprocess
 import tempfile
 from pathlib import Path
@@ -23,10 +24,10 @@ from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 
 from fretc.shield.build import build_shield
-from fretc.shield.emit_c import render_c
+from fretc.shield.emit_c import C_FREE_LIMIT, render_c
 from fretc.shield.emit_python import tables
 from fretc.shield.plan import ShieldError
-from fretc.shield.runtime import ShieldRuntime
+from fretc.shield.runtime import BELIEF_LIMIT, ShieldRuntime
 
 from _c_monitors import build, needs_cc, write
 from _gen import compile_text
@@ -153,3 +154,49 @@ def test_a_machine_with_no_outputs_safe_for_every_value_is_lost_in_both_forms(tm
     assert [d.outputs for d in decisions[:2]] == [{"o": False, "p": False}] * 2
     assert all(d.outputs == {} and d.lost == ("F3", "F4") for d in decisions[2:])
     assert decisions[2].reasons == ("F1",)
+
+
+def test_a_belief_past_its_bound_is_lost_at_the_same_tick_in_both_forms(tmp_path):
+    """Four deadlines on comparisons of ``d`` and ``e``, both NaN at most ticks and the
+    proposals never meeting a deadline: the belief grows past 256 states (the Python form's
+    BELIEF_LIMIT, the C form's capacity), and both forms lose the machine at the same tick,
+    giving the fallback's outputs from then on."""
+    needs_cc()
+    compiled = compile_text(
+        "R1: upon d > 1 sw shall within 5 ticks satisfy x\n"
+        "R2: upon d > 2 sw shall within 4 ticks satisfy y\n"
+        "R3: upon d > 3 sw shall within 6 ticks satisfy v > 2\n"
+        "R4: upon e > 2 sw shall within 5 ticks satisfy x & y\n", tmp_path)
+    shield = build_shield(compiled, INPUTS, OUTPUTS, fork=False)
+    assert shield.fallback is not None
+    rnd = random.Random(0)
+    rows = [({"a": False, "d": math.nan if rnd.random() < 0.8 else rnd.choice([0.0, 2.5, 3.5]),
+              "e": math.nan if rnd.random() < 0.8 else rnd.choice([0.0, 3.0])},
+             {"x": False, "y": False, "v": 0.0}) for _ in range(40)]
+    decisions = assert_alike(shield, rows)
+    lost = [k for k, d in enumerate(decisions) if d.lost]
+    assert lost and lost == list(range(lost[0], len(rows))), lost
+    assert f"more than {BELIEF_LIMIT} states" in decisions[lost[0]].fault
+    fb = shield.fallback["outputs"]
+    assert all({v: d.outputs[v] for v in fb} == fb for d in decisions[lost[0]:])
+
+
+def test_more_free_comparisons_than_the_c_bound_lose_the_machine_in_c(tmp_path):
+    """The one place the forms differ, by design: the C form tries the 2^k valuations of the
+    k input atoms a tick's NaN inputs leave free, k at most C_FREE_LIMIT; a machine with more
+    (here 18 comparisons of ``d``) is lost in C at such a tick (the fallback from then on,
+    column ``fault`` = ``input``, then ``lost``), where the Python form decides it."""
+    needs_cc()
+    assert C_FREE_LIMIT < 18
+    cond = " | ".join(f"d > {k}" for k in range(1, 19))
+    compiled = compile_text(f"R1: whenever {cond} sw shall immediately satisfy x\n", tmp_path)
+    shield = build_shield(compiled, INPUTS, OUTPUTS, fork=False)
+    assert shield.fallback is not None and shield.fallback["outputs"]["x"] is True
+    rows = [({"a": False, "d": x, "e": 0.0}, {"x": False, "y": False, "v": 0.0})
+            for x in (0.0, math.nan, 0.0, 0.0)]
+    c = run_c(shield, rows)
+    assert [(r["x"], r["overridden"], r["fault"]) for r in c] == [
+        ("0", "0", ""), ("1", "1", "input"), ("1", "1", "lost"), ("1", "1", "lost")], c
+    rt = ShieldRuntime(tables(shield))
+    d = [rt.step(i, p) for i, p in rows]
+    assert not any(x.lost for x in d) and d[1].outputs["x"] and not d[2].outputs["x"], d
