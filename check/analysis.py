@@ -139,6 +139,7 @@ def check_requirements(compiled: Sequence[Compiled], *, budget: Budget | None = 
             from fretc.check.realizability import check_realizability  # lazy: numpy, if asked
             result.realizability = check_realizability(checker, result, inputs or [],
                                                        outputs or [])
+        _link_findings(result)
         if witness_dir is not None:
             from fretc.check.witness import write_witnesses  # lazy: numpy, if asked
             assert witness_judge is not None  # (refused above)
@@ -199,6 +200,13 @@ def _run(ck: Checker, result: CheckResult, *, vacuity: bool, redundancy: bool,
 
         _check_component(ck, comp, status, result, vacuity, redundancy, say)
     result.requirements = [status[x.index] for x in ck.items]
+
+
+def _link_findings(result: CheckResult) -> None:
+    """Each requirement's status lists the indexes of the findings naming it (those of
+    realizability too: ``fretc report --check`` shows them on the requirement's row)."""
+    for s in result.requirements:
+        s["findings"] = []
     for n, f in enumerate(result.findings):
         for rid in f.requirements:
             for s in result.requirements:

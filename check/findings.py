@@ -19,8 +19,10 @@ class Finding:
     """One result worth a user's attention.
 
     ``kind``: ``unsatisfiable`` (one requirement), ``conflict`` (a set), ``vacuous``,
-    ``redundant``, ``unrealizable``, ``unknown``. ``severity``: ``error`` (exit 1),
-    ``warning`` or ``unknown``. ``requirements``: the ids it is about; ``subsets``: the
+    ``redundant``, ``unrealizable``, ``unknown``, ``undeclared`` (a component's
+    realizability not decided: a variable declared neither input nor output).
+    ``severity``: ``error`` (exit 1), ``warning``, ``unknown`` (exit 1) or ``input`` (an
+    input error: exit 2). ``requirements``: the ids it is about; ``subsets``: the
     subsets found (lists of ids, fewest members first); ``standing``: per subset
     ``smallest``, ``minimal`` or ``not shown minimal`` (:class:`fretc.check.checker.Subsets`);
     ``cut``: the subset enumeration ran out of its budget of checks; ``witness``: path of the witness CSV, ``expected`` the verdicts it promises.
@@ -88,8 +90,10 @@ class CheckResult:
     @property
     def exit_code(self) -> int:
         """0 no finding, 1 a conflict / vacuity / unrealizability (or an unknown answer:
-        nothing is called fine that was not checked), 2 input errors."""
-        if self.input_errors:
+        nothing is called fine that was not checked), 2 input errors (a requirement that did
+        not formalize, a variable of a realizability check declared neither input nor
+        output: a finding of severity ``input``)."""
+        if self.input_errors or any(f.severity == "input" for f in self.findings):
             return 2
         if any(f.severity in ("error", "unknown") for f in self.findings):
             return 1

@@ -1,8 +1,12 @@
 """Realizability of requirement sets for ``fretc check``.
 
 The FRET variables are split into **inputs** (the environment's: sensor-derived, e.g.
-``too_close``) and **outputs** (the component's, e.g. ``stopped``); a variable named in
-neither is taken as an output (the component's own state) and listed as such. A set is
+``too_close``) and **outputs** (the component's, e.g. ``stopped``). As in FRET, which checks
+realizability only when every variable is declared, a component that reads a variable
+declared neither input nor output is not decided: an ``undeclared`` finding (an input error,
+exit 2) names each such variable with the requirements that read it and how to declare it,
+and the other components are decided. No role is ever assumed: taking a sensor reading
+(``clearance``) as the controller's would call ``always clearance > 0`` realizable. A set is
 *realizable* when a controller exists that, reading the inputs tick by tick, sets the
 outputs so that every requirement holds on every infinite run whatever the inputs do
 (Pnueli & Rosner, POPL 1989). As in FRET's realizability checking, the question is asked per
@@ -50,7 +54,8 @@ if TYPE_CHECKING:
     from fretc.check.findings import CheckResult
     from fretc.check.checker import Checker
 
-__all__ = ["check_realizability", "RealizabilityError", "MACHINE"]
+__all__ = ["check_realizability", "RealizabilityError", "MACHINE",
+           "undeclared_variables"]
 
 #: who moves first in the game: at each tick the environment sets the inputs, then the
 #: controller sets the outputs knowing them (a Mealy machine; Spot's ``ltl_to_game`` and
@@ -70,7 +75,10 @@ def _atom_vars(atom) -> list[str]:
 def check_realizability(checker: Checker, result: CheckResult, inputs: Sequence[str], outputs: Sequence[str]
                         ) -> dict:
     """Decide realizability per component; append ``unrealizable`` / ``unknown`` findings
-    to ``result`` and return the JSON-able summary (module docstring).
+    to ``result`` and return the JSON-able summary (module docstring). A component reading
+    a variable in neither ``inputs`` nor ``outputs`` is not decided: its entry's
+    ``realizable`` is None, its ``undeclared`` the variables with the requirements reading
+    them, and an ``undeclared`` finding (severity ``input``: exit 2) says how to declare them.
 
     Raises :class:`RealizabilityError` when a variable is declared both input and output.
     """
@@ -83,13 +91,21 @@ def check_realizability(checker: Checker, result: CheckResult, inputs: Sequence[
         for v in x.variables:
             if v not in used:
                 used.append(v)
+    declared = set(inputs) | set(outputs)
     summary: dict[str, Any] = {"machine": MACHINE, "inputs": inputs, "outputs": outputs,
-               "assumed_outputs": [v for v in used if v not in inputs and v not in outputs],
+               "undeclared": [v for v in used if v not in declared],
                "unused": [v for v in inputs + outputs if v not in used],
                "components": []}
     decide = _Decider(checker, inputs)
     for comp in checker.components():
         entry: dict = {"requirements": _ids(comp)}
+        readers = undeclared_variables(comp, declared)
+        if readers:  # (FRET's rule: no role assumed, the component not decided)
+            entry["realizable"] = None
+            entry["undeclared"] = readers
+            result.findings.append(_undeclared_finding(comp, readers))
+            summary["components"].append(entry)
+            continue
         ans = decide(comp)
         if ans == UNKNOWN:
             entry["realizable"] = "unknown"
@@ -112,6 +128,51 @@ def check_realizability(checker: Checker, result: CheckResult, inputs: Sequence[
         summary["components"].append(entry)
     result.notes.extend(decide.notes)
     return summary
+
+
+def undeclared_variables(items: Sequence[Any], declared: set[str] | frozenset[str]
+                         ) -> dict[str, list[str]]:
+    """The variables of the check items ``items`` (:class:`fretc.check.items.CheckItem`)
+    that are not in ``declared`` (the inputs and the outputs), each with the ids of the
+    requirements that read it, in the order the requirements read them."""
+    out: dict[str, list[str]] = {}
+    for x in items:
+        for v in x.variables:
+            if v not in declared:
+                out.setdefault(v, [])
+                if x.id not in out[v]:
+                    out[v].append(x.id)
+    return out
+
+
+def _undeclared_finding(comp: Sequence[Any], readers: dict[str, list[str]]) -> Finding:
+    """The ``undeclared`` finding of a component whose realizability is not decided:
+    ``readers`` (:func:`undeclared_variables`) in words, with the FRET kind an export gives
+    a variable (an Internal or Mode variable fretc reads as a free one) and how to declare
+    them. Its severity ``input`` makes the exit code 2 (an input error, as FRET refuses to
+    check realizability then); the checks that need no roles are reported as ever."""
+    fret: dict[str, Any] = {}
+    for x in comp:
+        for v in getattr(x.compiled.entry, "variables", ()):
+            if v.name in readers and v.kind:
+                fret.setdefault(v.name, v)
+    names = [f"{v} (read by {', '.join(ids)})" for v, ids in readers.items()]
+    listed = names[0] if len(names) == 1 else ", ".join(names[:-1]) + " and " + names[-1]
+    kinds = [f"{v} {'an' if f.kind[0] in 'AEIOU' else 'a'} {f.kind}"
+             + (f" of {f.component}" if f.component else "")
+             + ("" if f.kind in ("Input", "Output") else ", a free variable to fretc")
+             for v, f in fret.items()]
+    one = len(readers) == 1
+    involved = [i for i in _ids(comp) if any(i in ids for ids in readers.values())]
+    msg = ("realizability of " + ", ".join(_ids(comp)) + " not checked: " + listed
+           + (" is" if one else " are") + " declared neither input nor output"
+           + (" (FRET's export: " + "; ".join(kinds) + ")" if kinds else "")
+           + "; declare " + ("it" if one else "each") + " with --inputs or --outputs, "
+           "@inputs/@outputs in the .fret file, or its Input/Output role in FRET's glossary "
+           "(as FRET, realizability is checked only when every variable is the "
+           "environment's or the controller's)")
+    return Finding("undeclared", "input", involved, msg,
+                   details={"undeclared": readers, "component": _ids(comp)})
 
 
 class _Decider:
@@ -346,13 +407,14 @@ def _unrealizable(checker, decide: _Decider, comp, ans: dict, inputs: list[str],
     entry["minimal_unrealizable"] = names
     entry["standing"] = found.standing
     entry["cut"] = cut
+    inputs = [v for v in inputs if v in _variables(comp)]  # (the component's own)
     env = _environment(checker, ans["counter"], inputs, ans["note"])
     entry["environment"] = env
     if ans["run"]:
         entry["run"] = [_values(checker, letter, _variables(comp)) for letter in ans["run"]]
     involved = sorted({i for s in names for i in s}, key=_ids(comp).index) or _ids(comp)
     msg = ("no controller meets " + ", ".join(_ids(comp)) + " whatever the inputs ("
-           + ", ".join(inputs) + ") do: "
+           + (", ".join(inputs) or "none") + ") do: "
            + subsets_text(names, found.standing, "unrealizable subset")
            + (f" (enumeration cut by its budget of {checker.mus_budget} subset checks)"
               if cut else ""))

@@ -21,7 +21,8 @@ def audit_verdicts(req: Path, csv: Path, tmp_path: Path) -> dict[str, str]:
 
 
 def replayed_unrealizable(req: Path, inputs: list[str], method: str, tmp_path: Path) -> dict:
-    """``fretc check`` of the unrealizable set in ``req`` with ``inputs`` as the inputs and
+    """``fretc check`` of the unrealizable set in ``req`` with ``inputs`` as the inputs (the
+    other variables the outputs) and
     witness CSVs: asserts the component is unrealizable by ``method``, that its witness (the
     defeating inputs with a controller's best effort) replays through ``fretc audit`` with
     the promised verdicts, and that a requirement of the set is violated on it. Returns the
@@ -31,7 +32,10 @@ def replayed_unrealizable(req: Path, inputs: list[str], method: str, tmp_path: P
     from fretc.fretish.files import load_requirements
     from fretc.monitors.interval import verdict_of
 
-    r = check_requirements(compile_entries(load_requirements([req])), inputs=inputs,
+    from tests.check._roles import rest_as_outputs
+
+    compiled = compile_entries(load_requirements([req]))
+    r = check_requirements(compiled, inputs=inputs, outputs=rest_as_outputs(compiled, inputs),
                            witness_dir=str(tmp_path / "w"), witness_judge=verdict_of)
     comp = r.realizability["components"][0]
     assert comp["realizable"] is False and comp["method"] == method, comp

@@ -208,12 +208,20 @@ def test_witnesses_replay_through_the_audit(tmp_path, text):
 
 
 def test_safe_ros_requirements(tmp_path):
+    """Every variable declared (the sensor reading ``clearance`` an input): R5 alone is
+    unrealizable, the others realizable (tests/check/test_undeclared.py: with ``clearance``
+    undeclared R5 is not decided)."""
     files = sorted(str(p) for p in (ROOT / "requirements").glob("*.fret"))
-    res = CliRunner().invoke(main, ["check", *files, "--inputs", "too_close", "--outputs",
-                                    "stopped", "--json"])
+    res = CliRunner().invoke(main, ["check", *files, "--inputs", "too_close,clearance,scan_stale",
+                                    "--outputs", "stopped,stop_requested,forwarded_zero,"
+                                    "linear_speed,angular_speed", "--json"])
     doc = json.loads(res.output)
-    assert res.exit_code == 0 and doc["findings"] == []
-    assert all(c["realizable"] is True for c in doc["realizability"]["components"])
+    assert res.exit_code == 1, res.output
+    assert [(f["kind"], f["requirements"]) for f in doc["findings"]] == [
+        ("unrealizable", ["R5"])]
+    assert {tuple(c["requirements"]): c["realizable"]
+            for c in doc["realizability"]["components"]} == {
+        ("R1", "R2"): True, ("R3", "R6"): True, ("R4",): True, ("R5",): False}
 
 
 def test_report_shows_check_findings(tmp_path):

@@ -18,15 +18,19 @@ from fretc.compiler.build import compile_entries
 from fretc.fretish.files import load_requirements
 from fretc.shield.build import build_shield
 from fretc.shield.plan import ShieldError
+from tests.check._roles import rest_as_outputs
 
 
 def realizability_of(tmp_path: Path, text: str, inputs: list[str]) -> dict:
     """The realizability entry of the first component of the set ``text`` (queries in this
-    process: the budgets are counted work, so the answers are the worker process's)."""
+    process: the budgets are counted work, so the answers are the worker process's; the
+    variables other than ``inputs`` outputs)."""
     p = tmp_path / "r.fret"
     p.write_text(text, encoding="utf-8")
     with SpotWorker(fork=False) as worker:
-        r = check_requirements(compile_entries(load_requirements([p])), inputs=inputs,
+        compiled = compile_entries(load_requirements([p]))
+        r = check_requirements(compiled, inputs=inputs,
+                               outputs=rest_as_outputs(compiled, inputs),
                                vacuity=False, redundancy=False, worker=worker)
     return r.realizability["components"][0]
 

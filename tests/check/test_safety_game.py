@@ -18,6 +18,7 @@ from fretc.compiler import ir
 from fretc.compiler.build import compile_entries
 from fretc.fretish.files import load_requirements
 from tests.check._replay import replayed_unrealizable
+from tests.check._roles import rest_as_outputs
 
 _TEMPLATES = [
     "whenever {a} the sw shall within {k} ticks satisfy {b}",
@@ -41,10 +42,11 @@ def _items(path: Path):
 
 def realizability_of(tmp_path: Path, text: str, inputs: list[str]) -> dict:
     """The realizability entry of the first component of the set ``text`` (satisfiability
-    checks only, no vacuity or redundancy)."""
+    checks only, no vacuity or redundancy; the variables other than ``inputs`` outputs)."""
     p = tmp_path / "r.fret"
     p.write_text(text, encoding="utf-8")
-    r = check_requirements(compile_entries(load_requirements([p])), inputs=inputs,
+    compiled = compile_entries(load_requirements([p]))
+    r = check_requirements(compiled, inputs=inputs, outputs=rest_as_outputs(compiled, inputs),
                            vacuity=False, redundancy=False)
     return r.realizability["components"][0]
 
@@ -119,14 +121,14 @@ def test_hundreds_of_ticks(tmp_path):
     p.write_text("A: whenever p the sw shall within 200 ticks satisfy q\n"
                  "B: upon p the sw shall for 197 ticks satisfy !q\n", encoding="utf-8")
     r = check_requirements(compile_entries(load_requirements([p])), inputs=["p"],
-                           vacuity=False, redundancy=False)
+                           outputs=["q"], vacuity=False, redundancy=False)
     comp = r.realizability["components"][0]
     assert comp["realizable"] is False and comp["minimal_unrealizable"] == [["A", "B"]]
     prefix = comp["environment"]["prefix"]
     assert prefix[0]["p"] is True and sum(row["p"] for row in prefix) == 2
     p.write_text("A: whenever p the sw shall within 200 ticks satisfy q\n", encoding="utf-8")
     r = check_requirements(compile_entries(load_requirements([p])), inputs=["p"],
-                           vacuity=False, redundancy=False)
+                           outputs=["q"], vacuity=False, redundancy=False)
     comp = r.realizability["components"][0]
     # the deadline is one counter of the oldest pending trigger's age (9 bits for 0..201),
     # not a delay line of 200 bits

@@ -8,12 +8,17 @@ any robot runs (the analyses are in :mod:`fretc.check.analysis`).
                 [--timeout SECONDS] [--engine auto|spot|smt|bdd] [--no-redundancy]
 
 Realizability is checked when inputs or outputs are given, by the flags or by the
-``@inputs``/``@outputs`` directives of the ``.fret`` files (flags win). The budgets are
+``@inputs``/``@outputs`` directives of the ``.fret`` files (flags win), or by a FRET export's
+Input and Output variables. As in FRET, every variable of a component must be one or the
+other: a component reading a variable declared neither is not decided, and the variable is
+named with the requirements reading it (an input error, exit 2; the other checks and
+components are reported as ever). The budgets are
 counted in work the engines do (:mod:`fretc.check.budget`), so the same input gives the same
 report on any machine; ``--timeout`` is a wall-clock limit of the whole run that stops it
 with no report. Exit status: 0 no finding (redundancy is a warning), 1 a conflict, vacuity,
-unrealizability or an unknown answer (a query past its budget), 2 input errors, 3 the run
-stopped by ``--timeout``.
+unrealizability or an unknown answer (a query past its budget), 2 input errors (a
+requirement that did not formalize, a variable of realizability declared neither input nor
+output), 3 the run stopped by ``--timeout``.
 """
 
 from __future__ import annotations
@@ -40,7 +45,7 @@ __all__ = ["check_cmd", "render_text"]
 def render_text(result: CheckResult) -> str:
     """The terminal report of a :class:`fretc.check.analysis.CheckResult`."""
     lines = []
-    mark = {"error": "ERROR", "warning": "warning", "unknown": "UNKNOWN"}
+    mark = {"error": "ERROR", "warning": "warning", "unknown": "UNKNOWN", "input": "ERROR"}
     for r in result.requirements:
         sat = r["satisfiable"]
         nv = r["non_vacuous"]
@@ -52,11 +57,16 @@ def render_text(result: CheckResult) -> str:
         lines.append("realizability (" + rz["machine"] + "): inputs "
                      + (", ".join(rz["inputs"]) or "-")
                      + "; outputs " + (", ".join(rz["outputs"]) or "-")
-                     + (("; taken as outputs: " + ", ".join(rz["assumed_outputs"]))
-                        if rz["assumed_outputs"] else ""))
+                     + (("; declared neither: " + ", ".join(rz["undeclared"]))
+                        if rz["undeclared"] else ""))
         for c in rz["components"]:
             status = c["realizable"]
             extra = ""
+            if "undeclared" in c:
+                lines.append(f"  {', '.join(c['requirements'])}: not checked: "
+                             + ", ".join(c["undeclared"]) + " declared neither input nor "
+                             "output")
+                continue
             if status is True and "mealy_states" in c:
                 extra = f" by a Mealy machine of {c['mealy_states']} states (Spot's game)"
             elif status is True and "strategy" in c:
