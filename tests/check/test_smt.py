@@ -248,7 +248,8 @@ def test_issue_26_crash_family_gives_answers_not_tracebacks(tmp_path):
                   "C1: upon too_close the scout_mini shall eventually satisfy "
                   "linear_speed > 0.6\n")
     for path, io in ((ab, ["--inputs", "p", "--outputs", "s"]),
-                     (c1, ["--inputs", "too_close", "--outputs", "stopped"])):
+                     (c1, ["--inputs", "too_close", "--outputs",
+                           "linear_speed,angular_speed"])):
         for engine in ("auto", "smt"):
             res = CliRunner().invoke(main, ["check", str(path), *io, "--engine", engine])
             assert res.exit_code == 1, res.output

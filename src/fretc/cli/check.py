@@ -141,8 +141,11 @@ def _lasso(prefix, cycle) -> str:
 
 @click.command("check")
 @click.argument("files", nargs=-1, required=True, type=click.Path(exists=True))
-@io_options("Environment variables (realizability); default: @inputs of the files.",
-            "Component variables (realizability); default: @outputs of the files.")
+@io_options("Environment variables (realizability: a component reading a variable that "
+            "is neither input nor output is not decided, exit 2); default: @inputs of the "
+            "files, or a FRET export's Input variables.",
+            "Component variables (realizability); default: @outputs of the files, or a FRET "
+            "export's Output variables.")
 @set_bindings_option("A binding file; fretc check reads its tick period only.")
 @selection_options
 @click.option("--json", "as_json", is_flag=True, help="Print the result as JSON.")
