@@ -500,7 +500,7 @@ def _files_of(paths, skipped: list[str] | None = None) -> list[str]:
     return out
 
 
-def requirement_files(paths) -> list[str]:
+def requirement_files(paths: PathLike | Iterable[PathLike]) -> list[str]:
     """The requirement files (and Doorstop trees) that ``paths`` (files or folders, as
     ``load_requirements`` takes them) name, in the order they are read: a folder's
     ``.fret``, FRET JSON exports, ReqIF files (a JSON file that is no FRET export left out).

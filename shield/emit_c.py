@@ -225,13 +225,13 @@ class _CMachine:
     def belief_cap(self) -> int:
         """The belief array's capacity: :data:`C_BELIEF_LIMIT`, or fewer when the state bits
         have fewer states (the belief can never hold more)."""
-        return min(C_BELIEF_LIMIT, 2 ** len(self.t["init"]))
+        return min(C_BELIEF_LIMIT, 1 << len(self.t["init"]))
 
     @property
     def case_cap(self) -> int:
         """The valuations of the free input atoms a tick keeps (at most
         :data:`C_CASES_LIMIT`)."""
-        return min(2 ** self.free_cap, C_CASES_LIMIT)
+        return min(1 << self.free_cap, C_CASES_LIMIT)
 
     @property
     def memo(self) -> bool:

@@ -14,7 +14,7 @@ import math
 from typing import Any
 
 from fretc.common.textsafe import python_doc
-from fretc.shield import runtime
+from fretc.shield import runtime, runtime_values
 from fretc.shield.build import Shield
 
 __all__ = ["tables", "render_python", "load_shield"]
@@ -63,18 +63,31 @@ def tables(shield: Shield) -> dict[str, Any]:
 
 
 def _runtime_body() -> str:
-    """:mod:`fretc.shield.runtime`'s source without its docstring and ``__all__``."""
-    src = inspect.getsource(runtime)
-    doc = runtime.__doc__ or ""
+    """:mod:`fretc.shield.runtime_values`' source, then :mod:`fretc.shield.runtime`'s, each
+    without its docstring and ``__all__``; the runtime's ``from __future__`` and its import
+    of the values module left out (the two read as one module)."""
+    return _body(runtime_values) + "\n\n" + _body(runtime, runtime_values.__name__)
+
+
+def _body(module: Any, inlined: str | None = None) -> str:
+    """``module``'s source without its docstring and ``__all__``; with ``inlined`` (a module
+    written before it into the same text) without its ``from __future__`` import and its
+    imports from ``inlined``."""
+    src = inspect.getsource(module)
+    doc = module.__doc__ or ""
     start = src.index('"""' + doc[:40])
     src = src[start + len(doc) + 6:].lstrip("\n")
     lines = src.splitlines()
+    drop: list[tuple[int, int]] = []
     for node in ast.parse(src).body:  # (the __all__ statement, over all its lines)
         if isinstance(node, ast.Assign) and any(isinstance(t, ast.Name) and t.id == "__all__"
                                                 for t in node.targets):
-            assert node.end_lineno is not None
-            del lines[node.lineno - 1:node.end_lineno]
-            break
+            drop.append((node.lineno, node.end_lineno or node.lineno))
+        if inlined is not None and isinstance(node, ast.ImportFrom) and (
+                node.module in ("__future__", inlined)):
+            drop.append((node.lineno, node.end_lineno or node.lineno))
+    for first, last in sorted(drop, reverse=True):
+        del lines[first - 1:last]
     return "\n".join(lines).rstrip() + "\n"
 
 

@@ -34,7 +34,7 @@ from typing import Any
 
 from fretc.shield.machine import Machine
 from fretc.shield.plan import ShieldError
-from fretc.shield.runtime import nearest, term_value, term_variables
+from fretc.shield.runtime_values import nearest, term_value, term_variables
 
 __all__ = ["fallback_of", "parse_fallback", "declared_fallback"]
 

@@ -64,8 +64,10 @@ from __future__ import annotations
 
 import math
 import numbers
-from collections.abc import Callable
 from typing import Any, NamedTuple
+
+from fretc.shield.runtime_values import (_OPS, kinds, nearest, term_value,
+                                         term_variables, truth)
 
 __all__ = ["Decision", "ShieldRuntime", "CACHE_LIMIT", "BELIEF_LIMIT", "CASES_LIMIT", "truth",
            "nearest", "term_value", "Unreadable", "read_value"]
@@ -82,10 +84,7 @@ BELIEF_LIMIT = 256
 #: machine decides one tick for; past it, as past :data:`BELIEF_LIMIT`
 CASES_LIMIT = 4096
 
-_OPS: dict[str, Callable[[float, float], bool]] = {
-    "<": lambda x, c: x < c, "<=": lambda x, c: x <= c, ">": lambda x, c: x > c,
-    ">=": lambda x, c: x >= c, "=": lambda x, c: x == c, "!=": lambda x, c: x != c}
-_NOT = {"<": ">=", "<=": ">", ">": "<=", ">=": "<", "=": "!=", "!=": "="}
+
 
 
 class Decision(NamedTuple):
@@ -111,26 +110,6 @@ class Decision(NamedTuple):
     #: the requirements of the machines that no longer know their state (module
     #: docstring): their outputs are the fallback's (none without one) until reset
     lost: tuple[str, ...] = ()
-
-
-def truth(spec: tuple[str, str | None, float | None], value: Any) -> bool:
-    """The truth of the atom ``spec`` ``(variable, op, constant)`` for the variable's
-    ``value`` (op None: a boolean variable, which must be given a bool or an int).
-
-    Raises:
-        TypeError: a boolean variable given something else. ValueError: a NaN."""
-    var, op, c = spec
-    if op is None:
-        if value is True or value is False:
-            return bool(value)
-        if not isinstance(value, int):
-            raise TypeError(f"{var} must be a boolean, not {value!r}")
-        return bool(value)
-    x = float(value)
-    if x != x:
-        raise ValueError(f"{var} is NaN: its comparisons have no truth value")
-    assert c is not None  # a comparison has its constant
-    return _OPS[op](x, c)
 
 
 class Unreadable(ValueError):
@@ -207,61 +186,6 @@ def _checked(kinds_of: dict[str, str], values: dict[str, Any], proposal: bool
     return out
 
 
-def term_value(t: tuple[Any, ...], values: dict[str, Any]) -> Any:
-    """A comparison of several variables, or one of its terms, at the variables' ``values``
-    in double arithmetic (IEEE division, as C computes it): ``("cmp", op, a, b)`` gives a
-    bool; ``("var", name)``, ``("num", x)``, ``("neg", a)``, ``(op, a, b)`` for ``+ - * /``,
-    ``("fn", absReal|absInt|minReal|minInt|maxReal|maxInt, a[, b])`` a float.
-
-    Raises ValueError: a variable's value is NaN."""
-    op = t[0]
-    if op == "cmp":
-        return _OPS[t[1]](term_value(t[2], values), term_value(t[3], values))
-    if op == "var":
-        x = float(values[t[1]])
-        if x != x:
-            raise ValueError(f"{t[1]} is NaN: its comparisons have no truth value")
-        return x
-    if op == "num":
-        return t[1]
-    if op == "neg":
-        return -term_value(t[1], values)
-    if op == "fn":
-        xs = [term_value(a, values) for a in t[2:]]
-        f = t[1][:3]
-        return abs(xs[0]) if f == "abs" else min(xs) if f == "min" else max(xs)
-    a, b = term_value(t[1], values), term_value(t[2], values)
-    if op == "+":
-        return a + b
-    if op == "-":
-        return a - b
-    if op == "*":
-        return a * b
-    if b == 0:
-        return math.nan if a == 0 or a != a else math.copysign(math.inf, a) * math.copysign(1.0, b)
-    return a / b
-
-
-def term_variables(t: tuple[Any, ...]) -> set[str]:
-    """The variables a comparison of several variables reads (:func:`term_value`'s shape)."""
-    if t[0] == "var":
-        return {t[1]}
-    return set().union(*(term_variables(x) for x in t[1:] if isinstance(x, tuple)))
-
-
-def kinds(specs: list[tuple[str, str | None, Any]]) -> dict[str, str]:
-    """Each variable the atoms ``specs`` read -> ``"b"`` (a boolean) or ``"n"`` (a
-    number), in first-seen order."""
-    out: dict[str, str] = {}
-    for var, op, c in specs:
-        if op == "pred":
-            for v in sorted(term_variables(c)):
-                out.setdefault(v, "n")
-        else:
-            out.setdefault(var, "b" if op is None else "n")
-    return out
-
-
 def _tester(spec: tuple[str, str | None, Any]) -> Any:
     """A function: the variables' values (a dict) -> the atom's truth (as :func:`truth`,
     :func:`term_value` for a comparison of several variables)."""
@@ -295,67 +219,6 @@ def _walk(nodes: list[tuple[int, int, int]], root: int, values: list[int]) -> in
         var, lo, hi = nodes[n]
         n = hi if values[var] else lo
     return n
-
-
-def nearest(specs: list[tuple[str, str | None, float | None]], truths: list[int],
-            x: float, integer: bool = False) -> float:
-    """The number nearest ``x`` giving the comparisons ``specs`` (of one variable) the
-    values ``truths``: ``x`` when it does, else the nearest end of their region (an open end
-    one float inside). ``integer`` (a variable of whole numbers): ``x`` when it gives them
-    and is whole or infinite, else the whole number nearest ``x`` that gives them (the
-    smaller of two as near; for a NaN or infinite ``x``, nearest the region's end as above),
-    so that a proposal of 4.4 under ``gear != 4`` is not left for an integer actuator to
-    round to 4. Raises ValueError when no number gives them."""
-    if not math.isnan(x) and all(truth(s, x) == bool(t) for s, t in zip(specs, truths)) \
-            and (not integer or math.isinf(x) or x == math.floor(x)):
-        return x
-    if integer:
-        return _nearest_whole(specs, truths, x)
-    lo, hi = -math.inf, math.inf
-    points: list[float] = []
-    for (_v, spec_op, c), t in zip(specs, truths):
-        assert spec_op is not None and c is not None  # numbers: comparisons only
-        op = spec_op if t else _NOT[spec_op]
-        if op in ("<", "<="):
-            hi = min(hi, c)
-        elif op in (">", ">="):
-            lo = max(lo, c)
-        elif op == "=":
-            points.append(c)
-    start = min(max(x, lo), hi) if not math.isnan(x) else (
-        lo if math.isfinite(lo) else hi if math.isfinite(hi) else 0.0)
-    for v in points + [start]:
-        for w in (v, math.nextafter(v, math.inf), math.nextafter(v, -math.inf)):
-            if all(truth(s, w) == bool(t) for s, t in zip(specs, truths)):
-                return w
-    raise ValueError("no number gives the comparisons of " + specs[0][0] + " those values")
-
-
-def _nearest_whole(specs: list[tuple[str, str | None, float | None]], truths: list[int],
-                   x: float) -> float:
-    """:func:`nearest` for a variable of whole numbers: the truths change only at the
-    constants, so the nearest whole number giving them is ``floor(x)``, ``ceil(x)``, or
-    ``ceil(c) - 1``, ``floor(c)`` or ``floor(c) + 1`` of a constant ``c``
-    (:meth:`fretc.check.numeric_abstraction.NumericAbstraction.region` keeps the same
-    points); the candidates are compared in doubles, as the C shield does."""
-    near = x
-    if not math.isfinite(x):  # (NaN or infinite: the region's end, as for reals)
-        near = nearest(specs, truths, x)
-    cands = [math.floor(near), math.ceil(near)] if math.isfinite(near) else []
-    for _v, _op, c in specs:
-        assert c is not None  # numbers: comparisons only
-        if math.isfinite(c):
-            cands += [math.ceil(c) - 1, math.floor(c), math.floor(c) + 1]
-    best = None
-    for w in map(float, cands):
-        if all(truth(s, w) == bool(t) for s, t in zip(specs, truths)) and (
-                best is None or abs(w - near) < abs(best - near)
-                or (abs(w - near) == abs(best - near) and w < best)):
-            best = w
-    if best is None:
-        raise ValueError("no whole number gives the comparisons of " + specs[0][0]
-                         + " those values")
-    return best
 
 
 class _Machine:

@@ -110,16 +110,11 @@ def audit_cmd(ctx: click.Context, logs: tuple[str, ...], requirements: tuple[str
     err = Console(stderr=True, highlight=False, soft_wrap=True, emoji=False)
     config = audit_config(requirements, bindings, inline, tick_period, tick_topic, time_base,
                           window, msg_path)
-    try:
+    try:  # (an output that is one of the inputs refused before any log is read)
         plan = load_plan(config)
         paths = find_logs(expand_log_args(logs))
-    except AuditInputError as exc:
-        err.print(f"[red]error:[/red] {escape(str(exc))}")
-        ctx.exit(2)
-        return
-    try:
         _refuse_replacing_inputs(plan, paths, json_path, junit_path, csv_dir)
-    except FretcError as exc:
+    except (AuditInputError, FretcError) as exc:
         err.print(f"[red]error:[/red] {escape(str(exc))}")
         ctx.exit(2)
         return
