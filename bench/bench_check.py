@@ -392,8 +392,9 @@ def every_part(args) -> None:
     print("2. realizability of Safe-ROS-sized sets (too_close, scan_stale inputs)")
     files = sorted(str(p) for p in (ROOT / "requirements").glob("*.fret"))
     t0 = cpu()
-    r = check_requirements(compile_entries(load_requirements(files)), inputs=["too_close"],
-                           outputs=["stopped"])
+    r = check_requirements(compile_entries(load_requirements(files)),
+                           inputs=['too_close', 'clearance', 'scan_stale'],
+                           outputs=['stopped', 'stop_requested', 'forwarded_zero', 'linear_speed', 'angular_speed'])
     print(f"  Safe-ROS R1-R6: {cpu() - t0:.2f} s CPU, "
           + "; ".join(f"{','.join(c['requirements'])}: realizable={c['realizable']}"
                       for c in r.realizability["components"]))
@@ -422,9 +423,10 @@ def every_part(args) -> None:
     t0 = cpu()
     w0 = time.perf_counter()
     proc = subprocess.run([sys.executable, "-m", "fretc", "check", "requirements/", "--inputs",
-                           "too_close", "--outputs", "stopped"], cwd=ROOT,
+                           "too_close,clearance,scan_stale", "--outputs",
+                           "stopped,stop_requested,forwarded_zero,linear_speed,angular_speed"], cwd=ROOT,
                           capture_output=True, text=True)
-    print(f"  fretc check requirements/ --inputs too_close --outputs stopped: exit "
+    print(f"  fretc check requirements/ --inputs too_close,clearance,scan_stale --outputs stopped,stop_requested,forwarded_zero,linear_speed,angular_speed: exit "
           f"{proc.returncode}, {cpu() - t0:.2f} s CPU ({time.perf_counter() - w0:.2f} s wall)")
     bound_sweep(args.budget)
 

@@ -76,7 +76,7 @@ def test_check_takes_b_and_decides_as_with_the_declared_period(tmp_path):
     report of the same file with ``@tick_period 100 ms`` (10 ticks: with the 1 tick FRET
     reads, R2's bound is another requirement)."""
     f = _no_period(tmp_path / "c")
-    args = ["--inputs", "too_close,scan_stale", "--outputs",
+    args = ["--inputs", "too_close,scan_stale,clearance", "--outputs",
             "stopped,stop_requested,forwarded_zero,linear_speed,angular_speed", "--json"]
     got = _run("check", str(f), "-b", str(BINDINGS), *args)
     declared = tmp_path / "d" / "sr.fret"
