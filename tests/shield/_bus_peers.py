@@ -9,6 +9,13 @@ Roles:
   (sensor_msgs/LaserScan, 720 beams over 360 degrees as the simulated Scout Mini's, best
   effort) every 100 ms: every range 0.5 m from 3 s to 6 s (an obstacle around the robot),
   3 m otherwise, and none from 8 s on (the LiDAR falls silent); it exits after SECONDS.
+* ``sector_lidar``, with OUT ``SCENARIO:BEAMS:FOV``: a LiDAR of another beam count and field
+  of view than the simulator's (``near:360:270``: 360 beams over 270 degrees from -135
+  degrees, REP 103: 0 ahead, counter-clockwise), once its two readers match, ``/scan`` every
+  100 ms until it exits after SECONDS, 3 m on every beam but: ``near``, an obstacle on the
+  beams within 30 degrees of ahead closing from 2 m at 2 s to 0.5 m at 3 s and staying there;
+  ``blind``, every range NaN from 3 s on (a LiDAR that fails while it keeps publishing).
+  Every valid range has up to 5 mm of noise (no frame repeats the one before).
 * ``controller``: once the Safety System subscribes, ``/cmd_vel`` (geometry_msgs/Twist,
   reliable) every 100 ms proposing to drive on at 0.3 m/s, for SECONDS.
 * ``checker``: an independent node that writes, as JSON lines into OUT, each message it
@@ -21,6 +28,8 @@ Roles:
 from __future__ import annotations
 
 import json
+import math
+import random
 import sys
 import time
 
@@ -70,6 +79,38 @@ def lidar(seconds: float, _out: str) -> None:
     _spin(n, seconds, step)
 
 
+def sector_lidar(seconds: float, spec: str) -> None:
+    from sensor_msgs.msg import LaserScan
+
+    scenario, beams, fov = spec.split(":")
+    count, width = int(beams), math.radians(float(fov))
+    angle_min, step_angle = -width / 2, width / (int(beams) - 1)
+    ahead = [i for i in range(count) if abs(angle_min + i * step_angle) <= math.radians(30)]
+    n = rclpy.create_node("lidar")
+    pub = n.create_publisher(LaserScan, "/scan", BEST_EFFORT)
+    _wait_for(n, pub, 2)
+    _spin(n, 1.0)
+
+    noise = random.Random(7)
+
+    def step(t: float) -> None:
+        ranges = [3.0] * count
+        if scenario == "near" and t >= 2.0:
+            for i in ahead:
+                ranges[i] = max(0.5, 2.0 - 1.5 * (t - 2.0))
+        # a real LiDAR's noise (no two frames alike: no frozen frame, R13)
+        ranges = [r + noise.uniform(-0.005, 0.005) for r in ranges]
+        if scenario == "blind" and t >= 3.0:
+            ranges = [math.nan] * count
+        s = LaserScan(angle_min=angle_min, angle_max=angle_min + (count - 1) * step_angle,
+                      angle_increment=step_angle, range_min=0.1, range_max=30.0,
+                      ranges=ranges)
+        s.header.stamp = n.get_clock().now().to_msg()
+        pub.publish(s)
+
+    _spin(n, seconds, step)
+
+
 def controller(seconds: float, _out: str) -> None:
     from geometry_msgs.msg import Twist
 
@@ -93,7 +134,8 @@ def checker(seconds: float, out: str) -> None:
     from std_msgs.msg import Bool
 
     n = rclpy.create_node("checker")
-    with open(out, "w", encoding="utf-8") as fh:
+    # line-buffered: each receipt is in OUT once written, should the node be ended early
+    with open(out, "w", encoding="utf-8", buffering=1) as fh:
         def keep(topic: str, info, fields: dict) -> None:
             fh.write(json.dumps({"topic": topic, "t": info["received_timestamp"],
                                  **fields}) + "\n")
@@ -118,7 +160,8 @@ def main() -> None:
     out = sys.argv[3] if len(sys.argv) > 3 else ""
     rclpy.init()
     try:
-        {"lidar": lidar, "controller": controller, "checker": checker}[role](seconds, out)
+        {"lidar": lidar, "sector_lidar": sector_lidar, "controller": controller,
+         "checker": checker}[role](seconds, out)
     finally:
         rclpy.try_shutdown()
 
