@@ -26,10 +26,11 @@ and in every case no non-zero command while the last stop request received is tr
 Before the bindings read the obstacle's bearing by angle (``sector()``), ``obstacle_ahead``
 was ``min(/scan.ranges[270:451])``, the 90 degrees ahead of 720 beams: on a LiDAR of 360
 beams, beams 270 to 359, its left flank, which never sees an obstacle ahead, and the
-documented node sent forward commands after its stop toward the obstacle at 0.5 m: 8 in the
-first graph seen with a 360-beam LiDAR; in ``near``, 0.15 m/s from 1.1 s after the stop (R11's
-hold over, R8's speed released with nothing ahead by the bindings), ``linear.x`` 0.0005 (a
-stopped command by the bindings' 1e-3, yet forward) before it.
+documented node sent forward commands after its stop toward the obstacle at 0.5 m (8 in the
+graph where it was first seen, a 360-beam LiDAR). With that binding ``near`` fails: after the
+stop, ``linear.x`` 0.0005 (stopped by the bindings' 1e-3, yet forward) through R11's hold,
+then 0.15 m/s (R8's speed, nothing ahead by the bindings) from 1.1 s after the stop to the
+LiDAR's end, 74 forward commands in all.
 """
 
 from __future__ import annotations
