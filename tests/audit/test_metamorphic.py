@@ -301,12 +301,15 @@ def test_the_generated_sets_use_every_function_and_modifier():
 
     text = " ".join(M.NUMBER_FORMS + M.ARRAY_FORMS + M.BOOL_FORMS)
     missing = [f for f in FUNCS if f"{f}(" not in text and f not in ("any", "all", "joint",
-                                                                     "tf", "waiting", "goal_waiting")]
+                                                                     "tf", "waiting", "goal_waiting",
+                                                                     "sector")]
     missing += [m for m in MODIFIERS if f"@{m}" not in text]
     assert missing == []
     # any/all over items, joint() and tf() need arrays of names and transforms: the robot
     # log of docs/bindings.md binds them (tests/docs/test_bindings_examples.py); waiting()
-    # and goal_waiting() a service's or an action's topics (tests/signals/test_services.py)
+    # and goal_waiting() a service's or an action's topics (tests/signals/test_services.py);
+    # sector() a LaserScan's ranges with its angles (tests/signals/test_sector.py: on every
+    # shipped trace, the sectors equal the beam slices at every tick)
 
 
 def test_a_generated_set_is_the_same_for_the_same_seed():
