@@ -216,7 +216,14 @@ def _graph_verdicts(tmp_path: Path, shielded: bool) -> tuple[dict, bytes]:
     controller.wait(120)
     recorder.wait(120)
     guard.terminate()
-    _out, err = guard.communicate(timeout=30)
+    try:
+        _out, err = guard.communicate(timeout=30)
+    except subprocess.TimeoutExpired:
+        # (an rclpy process that does not end on SIGTERM within 30 s on a loaded machine:
+        # seen once, the passthrough beside the AJPF and live tests; the verdicts are the
+        # recorder's, whose recording is complete, so the guard is killed)
+        guard.kill()
+        _out, err = guard.communicate(timeout=30)
     req = tmp_path / "r23.fret"
     text = (ROOT / "requirements" / "safe_ros.fret").read_text()
     req.write_text(text, encoding="utf-8")
