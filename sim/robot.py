@@ -28,7 +28,10 @@ class ScoutMiniParams:
     Footprint 0.42 m x 0.33 m (Safe-ROS ``costmap_common_params.yaml``:
     ``[[-0.21, -0.165], [-0.21, 0.165], [0.21, 0.165], [0.21, -0.165]]``); the base follows
     the commanded twist with the Safe-ROS DWA limits |v| <= 0.5 m/s, |w| <= 0.5 rad/s and
-    accelerations of 0.5 m/s^2 and 0.5 rad/s^2.
+    accelerations of 0.5 m/s^2 and 0.5 rad/s^2. ``cmd_timeout`` s: the chassis drops a speed
+    command older than its receive timeout and brakes to rest (the AgileX Scout Mini user
+    manual, CAN protocol: commands every 20 ms, dropped after 500 ms), so a Safety System
+    that goes silent (its node's restart) leaves the base at rest, not on its last command.
     """
 
     # dataclass fields, same shape as LidarParams' and sim.simulation.SimParams' (kept: parameter
@@ -39,6 +42,7 @@ class ScoutMiniParams:
     max_w: float = 0.5
     acc_v: float = 0.5
     acc_w: float = 0.5
+    cmd_timeout: float = 0.5
 
     @property
     def circumradius(self) -> float:

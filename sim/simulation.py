@@ -232,6 +232,7 @@ class Simulation:
         st = _RunState(trace=Trace(), delay_ms=int(round(self.safety.p.delay * 1000)),
                        max_ms=int(round(sim.max_time * 1000)))
         self.cmd_filtered = (0.0, 0.0)
+        self.cmd_filtered_ms = 0  # (its log time: the chassis' receive timeout)
         self.map_odom = self._loc_estimate()
         st.start_ms = int(round(sim.mission_start * 1000))
         st.start_ms += (50 - st.start_ms % 100) % 100  # first SRAS tick at or after mission_start
@@ -326,6 +327,7 @@ class Simulation:
     def _publish_filtered(self, rec: Recorder, st: _RunState, t_ms: int, v: float,
                           w: float) -> None:
         self.cmd_filtered = (v, w)
+        self.cmd_filtered_ms = t_ms
         rec.write("/cmd_vel_filtered", _ns(t_ms), rec.factory.twist(v, w))
         st.trace.cmd_t.append(t_ms / 1000.0)
         st.trace.cmd_v.append(v)
@@ -357,11 +359,15 @@ class Simulation:
                     st.trace.control.append((t_ms / 1000.0, bool(msg.data)))
 
     def _physics(self, st: _RunState, t_ms: int, t: float, s) -> None:
-        """1. The base executes the last ``/cmd_vel_filtered``; the contact check (a contact
-        blocks the base and ends the run ``contact_linger`` s later)."""
+        """1. The base executes the last ``/cmd_vel_filtered`` (rest once it is older than
+        the chassis' receive timeout, :class:`fretc.sim.robot.ScoutMiniParams`); the contact
+        check (a contact blocks the base and ends the run ``contact_linger`` s later)."""
         base = self.base
         if not st.blocked:
-            base.step(*self.cmd_filtered, STEP_MS / 1000.0)
+            cmd = self.cmd_filtered
+            if t_ms - self.cmd_filtered_ms > int(round(base.p.cmd_timeout * 1000)):
+                cmd = (0.0, 0.0)
+            base.step(*cmd, STEP_MS / 1000.0)
         self.odom.update(s.v, s.w, STEP_MS / 1000.0)
         if st.contact is None:
             lb = self.world.clearance_lower_bound(s.x, s.y, t, base.p.circumradius)

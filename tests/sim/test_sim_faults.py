@@ -421,3 +421,32 @@ def test_estimate_passes_the_fault_to_the_simulator(small, monkeypatch, tmp_path
         assert faults == (Fault(FAULT_KINDS[int(p["fault_kind"])], p["fault_start"],
                                 p["fault_duration"]),)
         assert 1.2 <= p["fault_start"] <= 2.0 and 0.3 <= p["fault_duration"] <= 0.6
+
+
+def _speeds(rec: Rec) -> dict[float, float]:
+    """The base's ground-truth speed (m/s) between consecutive poses, by the first pose's
+    time (s from the run's start, rounded to ms)."""
+    TYPES.setdefault("/ground_truth/pose", "geometry_msgs/msg/PoseStamped")
+    poses = rec.msgs("/ground_truth/pose")
+    return {round(t0, 3): math.hypot(b.pose.position.x - a.pose.position.x,
+                                     b.pose.position.y - a.pose.position.y) / (t1 - t0)
+            for (t0, a), (t1, b) in zip(poses, poses[1:])}
+
+
+def test_the_chassis_brakes_once_the_last_command_is_older_than_its_timeout(small_shield):
+    """The shield's node restarting for 0.9 s from 1.5 s: the simulated base executed its
+    last command through the whole silence (an estimate over sim/spaces/sensor_faults.toml
+    found contacts with the shield: a restart of 4 s at 30.7 s, on the approach to P3). The
+    Scout Mini's chassis drops a speed command older than 500 ms and brakes to rest (its
+    user manual, CAN protocol): the base holds the last command (0.12 m/s) until it is 500 ms
+    old, then brakes at its 0.5 m/s^2 and is at rest before the node is back, while the run
+    without the restart speeds up."""
+    from fretc.sim.run import shield_of
+
+    plain = _speeds(_run(shield=shield_of(f"shield:{small_shield}")))
+    got = _speeds(_faulty(Fault("safety_restart", 1.5, 0.9),
+                          shield=shield_of(f"shield:{small_shield}")))
+    held = got[1.5]
+    assert held > 0.05 and all(got[t] == pytest.approx(held) for t in (1.6, 1.7, 1.8))
+    assert got[2.0] < held and got[2.2] == 0.0 and got[2.35] == 0.0, got
+    assert plain[2.2] > 0.3, plain
