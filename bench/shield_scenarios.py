@@ -88,13 +88,9 @@ def main() -> int:
           "overridden ticks")
     for n in names:
         for s in ("sif", "shield"):
-            runs = [by[(n, k, s)] for k in range(1, a.seeds + 1)]
-            done = sum(o == "completed" for o, *_ in runs)
-            contact = sum(o == "contact" for o, *_ in runs)
-            least = min(c for _o, c, *_ in runs)
-            over = (f"{sum(ov for _o, _c, ov, _t in runs)} of "
-                    f"{sum(t for *_x, t in runs)}") if s == "shield" else "-"
-            print(f"{n:20s} {s:7s} {done:9d} {len(runs) - done - contact:7d} {contact:7d}  "
+            done, aborted, contact, least, over = _outcomes(
+                [by[(n, k, s)] for k in range(1, a.seeds + 1)], s == "shield")
+            print(f"{n:20s} {s:7s} {done:9d} {aborted:7d} {contact:7d}  "
                   f"{least:15.3f}  {over}")
     lost = [(n, k, by[(n, k, 'shield')][0]) for n in names for k in range(1, a.seeds + 1)
             if by[(n, k, "sif")][0] == "completed" and by[(n, k, "shield")][0] != "completed"]
@@ -107,6 +103,18 @@ def main() -> int:
     print(f"{len(work) // 2} runs per Safety System; shield: {len(contacts)} contacts, "
           f"{len(lost)} missions the SIF completes left uncompleted")
     return 1 if lost or contacts else 0
+
+
+def _outcomes(runs: list[tuple], shield: bool) -> tuple[int, int, int, float, str]:
+    """Of runs ``(outcome, least clearance m, overrides, shield ticks)``: how many completed,
+    were aborted, ended in contact, the least clearance, and (for the shield) the ticks
+    overridden of its ticks ("-" for the SIF)."""
+    done = sum(o == "completed" for o, *_ in runs)
+    contact = sum(o == "contact" for o, *_ in runs)
+    least = min(c for _o, c, *_ in runs)
+    over = (f"{sum(ov for _o, _c, ov, _t in runs)} of {sum(t for *_x, t in runs)}"
+            if shield else "-")
+    return done, len(runs) - done - contact, contact, least, over
 
 
 def _fault_list(ap: argparse.ArgumentParser, a: argparse.Namespace) -> list[Fault]:
@@ -143,12 +151,8 @@ def _faults(ap: argparse.ArgumentParser, a: argparse.Namespace, names: list[str]
         fs = [None] if kind == "none" else [f for f in faults if f.kind == kind]
         for s in ("sif", "shield"):
             runs = [by[(n, k, s, f)] for f in fs for n in names for k in seeds]
-            done = sum(o == "completed" for o, *_ in runs)
-            contact = sum(o == "contact" for o, *_ in runs)
-            least = min(c for _o, c, *_ in runs)
-            over = (f"{sum(ov for _o, _c, ov, _t in runs)} of "
-                    f"{sum(t for *_x, t in runs)}") if s == "shield" else "-"
-            print(f"{kind:15s} {s:7s} {len(runs):5d} {done:9d} {len(runs) - done - contact:7d} "
+            done, aborted, contact, least, over = _outcomes(runs, s == "shield")
+            print(f"{kind:15s} {s:7s} {len(runs):5d} {done:9d} {aborted:7d} "
                   f"{contact:7d}  {least:15.3f}  {over}")
     contacts = [(n, k, s, f) for (n, k, s, f), r in by.items() if r[0] == "contact"]
     for n, k, s, f in contacts:

@@ -43,7 +43,7 @@ from typing import IO, Any, BinaryIO, cast
 from fretc.common.errors import FretcError
 
 __all__ = ["OutputError", "write_file", "open_output", "create_output", "write_under",
-           "output_folder", "sub_folder", "refuse_replacing_inputs"]
+           "output_folder", "sub_folder", "refuse_replacing_inputs", "same_path"]
 
 _NOFOLLOW = getattr(os, "O_NOFOLLOW", 0)
 _EXCL = os.O_WRONLY | os.O_CREAT | os.O_EXCL | _NOFOLLOW | getattr(os, "O_CLOEXEC", 0) \
@@ -206,10 +206,10 @@ def sub_folder(parent: str | os.PathLike, name: str) -> str:
 Named = tuple[str, "str | os.PathLike[str] | None"]
 
 
-def _same(a: str, b: str) -> bool:
-    """Whether paths ``a`` and ``b`` name one file: equal once resolved (links followed,
-    ``os.path.realpath``), or one file by its device and inode (a hard link,
-    ``os.path.samefile``) when both exist."""
+def same_path(a: str | os.PathLike[str], b: str | os.PathLike[str]) -> bool:
+    """Whether paths ``a`` and ``b`` name one file or folder: equal once resolved (links
+    followed, ``os.path.realpath``), or one by its device and inode (a hard link,
+    ``os.path.samefile``) when both exist. Never raises."""
     if os.path.realpath(a) == os.path.realpath(b):
         return True
     try:
@@ -244,11 +244,11 @@ def refuse_replacing_inputs(outputs: Iterable[Named],
         out = os.fspath(path)
         for in_what, src in ins:
             whole = os.path.isdir(src)
-            if (_inside(out, src) or _same(out, src)) if whole else _same(out, src):
+            if (_inside(out, src) or same_path(out, src)) if whole else same_path(out, src):
                 moved = [f"{x} resolves to {os.path.realpath(x)}" for x in dict.fromkeys(
                     (out, src)) if os.path.realpath(x) != os.path.abspath(x)]
                 where = f" ({'; '.join(moved)})" if moved else ""
-                rel = "inside" if whole and not _same(out, src) else "the same file as"
+                rel = "inside" if whole and not same_path(out, src) else "the same file as"
                 raise OutputError(
                     f"{what} {out} is {rel} {in_what} {src}{where}: an output never replaces "
                     "an input of the same command; nothing was written (name another output)")

@@ -367,6 +367,22 @@ def make_extractor(f: Field, constants: dict[str, Any] | None = None, exact: boo
     return extract
 
 
+def _walked(walk: Callable[[Any], Any], data: Any, path: tuple[Any, ...], text: str) -> Any:
+    """``walk(data)``, its lookup errors as :class:`FieldAccessError` naming the field
+    ``text`` (as :func:`make_extractor`'s).
+
+    Raises:
+        FieldAccessError: no such field, an index out of range, or a value not indexable."""
+    try:
+        return walk(data)
+    except AttributeError as exc:
+        raise _no_field(data, path, text, exc) from None
+    except IndexError:
+        raise FieldAccessError(f"{text}: index out of range") from None
+    except (TypeError, KeyError) as exc:
+        raise FieldAccessError(f"{text}: cannot index ({exc})") from None
+
+
 def _exact(f: Field) -> Callable[[Any], Any]:
     """:func:`make_extractor`'s exact read of a path without a filter before its end: an
     array (numpy, list, a slice of one) as the list of its values, a scalar as
@@ -381,14 +397,7 @@ def _exact(f: Field) -> Callable[[Any], Any]:
     text = f.text()
 
     def extract(data: Any) -> Any:
-        try:
-            v = walk(data)
-        except AttributeError as exc:
-            raise _no_field(data, path, text, exc) from None
-        except IndexError:
-            raise FieldAccessError(f"{text}: index out of range") from None
-        except (TypeError, KeyError) as exc:
-            raise FieldAccessError(f"{text}: cannot index ({exc})") from None
+        v = _walked(walk, data, path, text)
         if isinstance(v, np.ndarray):
             v = v.tolist()  # (Python ints of any width: int64, uint64 exact)
         elif isinstance(v, tuple):

@@ -122,10 +122,11 @@ class Ops:
         +inf (no return within range) is still +inf: REP 117's clear view."""
         if a.mask is None or a.data.dtype.kind != "f":
             return got
-        blind = ~a.mask.any(axis=self.axis) & self._invalid(a).any(axis=self.axis)
-        if not np.any(blind):
+        empty = ~a.mask.any(axis=self.axis)
+        if not np.any(empty):  # (the common case: a valid return in every scan)
             return got
-        return np.where(blind, np.nan, got)
+        blind = empty & self._invalid(a).any(axis=self.axis)
+        return np.where(blind, np.nan, got) if np.any(blind) else got
 
     def _count(self, a: Valid) -> Any:
         if a.mask is None:

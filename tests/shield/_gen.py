@@ -118,3 +118,20 @@ def verdicts(compiled, trace: list[dict]) -> dict[str, str]:
 def finite(x: float) -> bool:
     """Whether ``x`` is a finite number."""
     return math.isfinite(x)
+
+
+def fault_kind(d) -> str:
+    """The C runner's ``fault`` column for the Python form's decision ``d``: the first of its
+    notes, ``input`` (an input unread), ``lost`` (a machine that no longer knows its state),
+    ``proposal`` (a proposal replaced), or empty."""
+    if not d.fault:
+        return ""
+    if d.fault.startswith("input "):
+        return "input"
+    return "lost" if d.lost else d.fault.split(" ")[0]
+
+
+def csv_cell(x) -> str:
+    """A value as a cell of the C runner's input CSV (``true``/``false``, or a float's
+    repr: ``nan``, ``inf`` too)."""
+    return ("true" if x else "false") if isinstance(x, bool) else repr(float(x))

@@ -30,7 +30,7 @@ from fretc.shield.plan import ShieldError
 from fretc.shield.runtime import BELIEF_LIMIT, ShieldRuntime
 
 from _c_monitors import build, needs_cc, write
-from _gen import compile_text
+from _gen import compile_text, csv_cell, fault_kind
 
 INPUTS = ["a", "d", "e"]
 OUTPUTS = ["x", "y", "v"]
@@ -69,20 +69,6 @@ def runs(draw, length: int = 60) -> list[tuple[dict, dict]]:
     return out
 
 
-def fault_kind(d) -> str:
-    """The C runner's ``fault`` column for the Python form's decision ``d`` (the first of its
-    notes)."""
-    if not d.fault:
-        return ""
-    if d.fault.startswith("input "):
-        return "input"
-    return "lost" if d.lost else d.fault.split(" ")[0]
-
-
-def _cell(x) -> str:
-    return ("true" if x else "false") if isinstance(x, bool) else repr(float(x))
-
-
 def run_c(shield, rows: list[tuple[dict, dict]]) -> list[dict]:
     """The C runner's rows for ``rows`` (inputs, proposal: the variables of the first)."""
     with tempfile.TemporaryDirectory() as tmp:
@@ -94,7 +80,7 @@ def run_c(shield, rows: list[tuple[dict, dict]]) -> list[dict]:
         w = csv.writer(text, lineterminator="\n")
         w.writerow(ins_vars + outs_vars)
         for ins, prop in rows:
-            w.writerow([_cell(ins[v]) for v in ins_vars] + [_cell(prop[v]) for v in outs_vars])
+            w.writerow([csv_cell(ins[v]) for v in ins_vars] + [csv_cell(prop[v]) for v in outs_vars])
         got = subprocess.run([str(exe)], input=text.getvalue(), capture_output=True,
                              text=True, timeout=60)
     assert got.returncode == 0 and not got.stderr, got.stderr

@@ -44,7 +44,8 @@ from fretc.shield.machine import evaluate
 from fretc.shield.runtime import ShieldRuntime
 
 from _c_monitors import build as build_c, needs_cc, write
-from _gen import (CONDITIONS, RESPONSES, SCOPES, TIMINGS, atoms_of, compile_text, verdicts)
+from _gen import (CONDITIONS, RESPONSES, SCOPES, TIMINGS, atoms_of, compile_text, csv_cell,
+                  fault_kind, verdicts)
 
 INPUTS = ["a", "b", "d", "m"]
 OUTPUTS = ["x", "y", "v"]
@@ -314,7 +315,7 @@ def test_the_c_form_is_all_or_nothing_as_the_python_form(text, run):
         for ins, prop, fault in run:
             ins = _with(ins, fault[1], fault[2]) if fault and fault[0] == "input" else ins
             prop = _with(prop, fault[1], fault[2]) if fault and fault[0] == "proposal" else prop
-            w.writerow([_cell(ins[v]) for v in INPUTS] + [_cell(prop[v]) for v in OUTPUTS])
+            w.writerow([csv_cell(ins[v]) for v in INPUTS] + [csv_cell(prop[v]) for v in OUTPUTS])
         got = subprocess.run([str(exe)], input=text_in.getvalue(), capture_output=True,
                              text=True, timeout=60)
     assert got.returncode == 0 and not got.stderr, got.stderr
@@ -334,21 +335,6 @@ def test_the_c_form_is_all_or_nothing_as_the_python_form(text, run):
                     math.isnan(d.outputs[v]) and math.isnan(float(c[v]))), (v, d, c)
             else:
                 assert c[v] == str(int(d.outputs[v])), (v, d, c)
-
-
-def fault_kind(d) -> str:
-    """The C runner's ``fault`` column for the Python form's decision ``d``: the first of its
-    notes, ``input`` (an input unread), ``lost`` (a machine that no longer knows its state),
-    ``proposal`` (a proposal replaced), or empty."""
-    if not d.fault:
-        return ""
-    if d.fault.startswith("input "):
-        return "input"
-    return "lost" if d.lost else d.fault.split(" ")[0]
-
-
-def _cell(x) -> str:
-    return ("true" if x else "false") if isinstance(x, bool) else repr(float(x))
 
 
 def test_a_message_shield_whose_messages_fail_takes_no_step(tmp_path, monkeypatch):

@@ -637,11 +637,12 @@ def requirement_inputs(paths: Sequence[str | os.PathLike[str]], what: str = "the
 
     Raises:
         FretishFileError: a path that is neither a file nor a folder."""
+    from fretc.common.outputs import same_path
     from fretc.fretish.files import requirement_files
 
     files = [(what, f) for f in requirement_files([os.fspath(p) for p in paths])]
     folders = [("the requirement folder", os.fspath(p)) for p in paths
-               if os.path.isdir(p) and not any(_same_path(p, f) for _, f in files)]
+               if os.path.isdir(p) and not any(same_path(p, f) for _, f in files)]
     return files, folders
 
 
@@ -662,14 +663,14 @@ def refuse_outputs_over_inputs(outputs: Sequence[tuple[str, Any]],
     Raises:
         OutputError: the first output that is an input (exit 2 through the command group,
             naming both)."""
-    from fretc.common.outputs import refuse_replacing_inputs
+    from fretc.common.outputs import refuse_replacing_inputs, same_path
 
     refuse_replacing_inputs(outputs, inputs)
     ins = [(w, os.fspath(p)) for w, p in in_folders if p is not None]
     for what, folder in out_folders:
         if folder is not None:
             refuse_replacing_inputs([(what, folder)],
-                                    [(w, p) for w, p in ins if _same_path(folder, p)][:1])
+                                    [(w, p) for w, p in ins if same_path(folder, p)][:1])
 
 
 def refuse_folder_over_inputs(output: str, requirements: Sequence[str],
@@ -687,14 +688,3 @@ def refuse_folder_over_inputs(output: str, requirements: Sequence[str],
         [("-o", output)], files + [("the binding file", b) for b in bindings
                                    if not os.path.isdir(b)] + [("--space", space_path)],
         [("-o", output)], folders)
-
-
-def _same_path(a: str | os.PathLike[str], b: str | os.PathLike[str]) -> bool:
-    """Whether ``a`` and ``b`` name one file or folder: equal once resolved (links followed),
-    or one by device and inode when both exist."""
-    if os.path.realpath(a) == os.path.realpath(b):
-        return True
-    try:
-        return os.path.samefile(a, b)
-    except OSError:
-        return False
