@@ -185,6 +185,7 @@ def _requirement_fields(r: dict, rt: RequirementTrace | None, bvars: dict,
         "warnings": list(rt.warnings) if rt else [],
         "notes": list(r.get("notes") or []), "error": r.get("error"),
         "reading": rt.reading if rt else None, "diagram": rt.diagram_svg if rt else None,
+        "semantics": rt.semantics_svg if rt else None,
         "changed": rt.changed if rt else "not found in the requirement files: shown from "
                                          "the audit JSON only",
         "cells": [],

@@ -219,6 +219,7 @@ class RequirementTrace:
     changed: str | None = None
     reading: str | None = None
     diagram_svg: str | None = None
+    semantics_svg: str | None = None
 
 
 def _trace_of(rp, compiled, psl_mapping: dict, modules: dict[str, ModuleInfo]
@@ -259,7 +260,8 @@ def _trace_of(rp, compiled, psl_mapping: dict, modules: dict[str, ModuleInfo]
 
 
 def _explained(rt: RequirementTrace, compiled) -> None:
-    """The reading and diagram of ``fretc explain`` on the requirement's card."""
+    """The reading and diagram of ``fretc explain`` on the requirement's card, and FRET's
+    semantics diagram (:mod:`fretc.reports.semantics_diagram`)."""
     from fretc.monitors.explain import explain
 
     from fretc.reports.explanation import svg
@@ -269,6 +271,11 @@ def _explained(rt: RequirementTrace, compiled) -> None:
     except (ValueError, KeyError):  # free-form, or nothing to draw: the card goes without
         return
     rt.reading, rt.diagram_svg = x.reading, svg(x)
+    from fretc.reports.semantics_diagram import svg as semantics_svg
+
+    f, req = compiled.formalization, compiled.requirement
+    if f is not None and req is not None:
+        rt.semantics_svg = semantics_svg(req, f.ticks, rt.id)
 
 
 def _modules_of(plan) -> dict[str, ModuleInfo]:

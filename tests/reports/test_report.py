@@ -247,6 +247,21 @@ def test_requirements_are_traced_to_formulas_monitor_and_ajpf(shipped):
         assert mod.find(f".//{X}pre").text == text
 
 
+def test_every_requirement_card_shows_fret_semantics_diagram(shipped):
+    """FRET's semantics diagram of each requirement, inline in its card: its key, its
+    windows and the same bytes as ``fretc explain --semantics`` writes."""
+    for r in shipped["doc"]["requirements"]:
+        sec = next(e for e in shipped["tree"].iter(f"{X}section")
+                   if e.get("data-requirement") == r["id"] and e.get("class") == "req")
+        fig = sec.find(f"{X}figure[@class='semantics']")
+        assert fig is not None, r["id"]
+        diagram = fig.find(f"{SVG}svg")
+        assert diagram.get("data-key") == r["key"]
+        assert r["id"] in _text(fig.find(f"{X}figcaption"))
+        windows = [e for e in diagram.iter(f"{SVG}rect") if e.get("class") == "window"]
+        assert windows, r["id"]
+
+
 def test_coverage_of_the_shipped_runs(shipped):
     doc, tree = shipped["doc"], shipped["tree"]
     cov = _by_id(tree)["coverage"]

@@ -1,6 +1,8 @@
 """``fretc explain FILE [ID...]``: each requirement's reading in plain English, its template
 key, durations in ticks and time, and its diagram in FRET's manner (:mod:`fretc.monitors.explain`)
-in the terminal, and as SVG with ``-o DIR``.
+in the terminal, and as SVG with ``-o DIR``; ``--semantics DIR`` writes FRET's semantics
+diagram of each (:mod:`fretc.reports.semantics_diagram`: scope intervals, triggers, the
+timing's window).
 
 Exit codes: 0 explained, 1 a requirement did not formalize (its error printed), 2 an input
 error (a file, an id that does not exist).
@@ -24,8 +26,13 @@ __all__ = ["explain_cmd"]
 @click.argument("ids", nargs=-1)
 @click.option("-o", "--output", type=click.Path(file_okay=False), default=None,
               help="Write one SVG diagram per requirement into this folder.")
+@click.option("--semantics", "semantics", type=click.Path(file_okay=False), default=None,
+              help="Write FRET's semantics diagram of each requirement (its scope intervals, "
+                   "trigger points and the timing's window, as FRET's Semantics panel draws "
+                   "them) into this folder, one ID.svg each.")
 @TEXT_ATTRIBUTE_OPTION
-def explain_cmd(file: str, ids: tuple[str, ...], output: str | None) -> None:
+def explain_cmd(file: str, ids: tuple[str, ...], output: str | None,
+                semantics: str | None = None) -> None:
     """Explain the requirements of FILE (or only IDS): plain English, template key and a
     diagram of the scope, the triggers and the response windows."""
     from fretc.compiler.build import compile_entries
@@ -45,17 +52,7 @@ def explain_cmd(file: str, ids: tuple[str, ...], output: str | None) -> None:
         sys.exit(2)
     code = 0
     stems = file_stems(known)
-    if output is not None:
-        from fretc.common.outputs import output_folder, write_file
-
-        from fretc.cli.options import refuse_outputs_over_inputs, requirement_inputs
-
-        files, folders = requirement_inputs([file])
-        refuse_outputs_over_inputs(
-            [("-o", Path(output) / f"{stems[c.id]}.svg") for c in compiled
-             if (not ids or c.id in ids) and c.formalization is not None],
-            files, [("-o", output)], folders)
-        output_folder(output)
+    _prepare_outputs(file, compiled, ids, stems, [("-o", output), ("--semantics", semantics)])
     for c in compiled:
         if ids and c.id not in ids:
             continue
@@ -67,7 +64,37 @@ def explain_cmd(file: str, ids: tuple[str, ...], output: str | None) -> None:
         x = explain(c)
         click.echo(_shown(text(x)))
         if output is not None:
-            path = Path(output) / f"{stems[c.id]}.svg"
-            write_file(path, svg(x))
-            click.echo(_shown(f"wrote {path}"), err=True)
+            _write(Path(output) / f"{stems[c.id]}.svg", svg(x))
+        if semantics is not None:
+            from fretc.reports.semantics_diagram import svg as semantics_svg
+
+            req = c.requirement
+            assert req is not None  # (it formalized)
+            _write(Path(semantics) / f"{stems[c.id]}.svg",
+                   semantics_svg(req, c.formalization.ticks, c.id))
     sys.exit(code)
+
+
+def _write(path: Path, text: str) -> None:
+    from fretc.common.outputs import write_file
+
+    write_file(path, text)
+    click.echo(_shown(f"wrote {path}"), err=True)
+
+
+def _prepare_outputs(file: str, compiled, ids, stems, outputs) -> None:
+    """Refuse an output folder over the inputs, then make each folder given."""
+    outputs = [(flag, folder) for flag, folder in outputs if folder is not None]
+    if not outputs:
+        return
+    from fretc.common.outputs import output_folder
+
+    from fretc.cli.options import refuse_outputs_over_inputs, requirement_inputs
+
+    files, folders = requirement_inputs([file])
+    refuse_outputs_over_inputs(
+        [(flag, Path(folder) / f"{stems[c.id]}.svg") for flag, folder in outputs
+         for c in compiled if (not ids or c.id in ids) and c.formalization is not None],
+        files, outputs, folders)
+    for _flag, folder in outputs:
+        output_folder(folder)
