@@ -233,7 +233,7 @@ def _add_cells(rc: dict, r: dict, rt: RequirementTrace | None, logs: list[dict],
                violations: list[dict]) -> None:
     """Append the requirement's matrix cells (one per run) to ``rc["cells"]`` and its
     violations to ``violations``; ``rc["margin_svg"]`` its margin over time in every run."""
-    margins: list[tuple[str, list]] = []
+    margins: list[tuple] = []
     for j, la in enumerate(logs):
         v = verdict_for(la, rc["index"], r)
         cls, label = cell_label(v)
@@ -243,7 +243,8 @@ def _add_cells(rc: dict, r: dict, rt: RequirementTrace | None, logs: list[dict],
         cell: dict[str, Any] = {"run": j, "verdict": cls, "label": label, "word": word,
                 "at": ("@ " + at) if at else "",
                 "partial": bool(v and v.get("partial")), "row_anchor": row_anchor,
-                "href": "#" + row_anchor, "witness": witness(v) if v else [],
+                "href": "#" + row_anchor,
+                "witness": witness(v, la.get("start_time_ns")) if v else [],
                 "violation_anchor": None, "log_time_ns": None}
         if v is not None and cls == "violated" and v.get("first_violation"):
             va = anchors.make("v", r.get("id", ""), Path(run["name"]).stem)
@@ -254,7 +255,9 @@ def _add_cells(rc: dict, r: dict, rt: RequirementTrace | None, logs: list[dict],
                                          period_ns))
         rob = (v or {}).get("robustness") or {}
         cell["robustness"] = robustness_text(rob.get("value"), "-")
-        margins.append((run["name"], rob.get("margin") or []))
+        margins.append((run["name"], rob.get("margin") or [],
+                        (rob.get("time_s"), rob.get("value")) if rob.get("tick") is not None
+                        else None))
         rc["cells"].append(cell)
     rc["margin_svg"] = margin_svg(margins, f"{r.get('id')}: margin over time")
 

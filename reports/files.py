@@ -27,6 +27,7 @@ from fretc.common.textsafe import no_surrogates
 from fretc.reports.context import report_context
 from fretc.audit.verdict import SCHEMA
 from fretc.reports.render import render_html, render_markdown
+from fretc.reports.check_section import check_context
 from fretc.reports.matrix import matrix_csv, matrix_html, matrix_rows
 from fretc.reports.trace import ReportError, resolve_input, split_source, trace_requirements
 
@@ -191,7 +192,7 @@ def write_report(doc: dict, out_dir: str, *, plan: AuditPlan | None = None,
                  base: str | None = None,
                  json_dir: str | None = None, psl_map: str | None = None,
                  annotate_dir: str | None = None, title: str | None = None,
-                 generated: str | None = None) -> ReportFiles:
+                 generated: str | None = None, check: dict | None = None) -> ReportFiles:
     """Write the report of an audit document into ``out_dir`` (created).
 
     Args:
@@ -204,6 +205,8 @@ def write_report(doc: dict, out_dir: str, *, plan: AuditPlan | None = None,
         annotate_dir: also write annotated MCAP copies there (:mod:`fretc.audit.annotate`).
         title: report title.
         generated: the generation line (default: now, or ``SOURCE_DATE_EPOCH``).
+        check: a ``fretc check -o`` document (``--check``): its findings in a section of
+            their own (:mod:`fretc.reports.check_section`) and the matrix's check column.
 
     Raises:
         ReportError: the output cannot be written, or the psl map is bad.
@@ -224,7 +227,8 @@ def write_report(doc: dict, out_dir: str, *, plan: AuditPlan | None = None,
     doc = no_surrogates(doc)  # a log name that is not UTF-8: written escaped, never an error
     ctx = report_context(doc, traces, modules, notes=notes, annotated=annotated, title=title,
                          base=basep, json_dir=jd, generated=generated)
-    ctx["matrix_rows"] = matrix_rows(doc, _current_entries(doc, basep, jd))
+    ctx["matrix_rows"] = matrix_rows(doc, _current_entries(doc, basep, jd), check=check)
+    ctx["check"] = check_context(check) if check is not None else None
     html, md = render_html(ctx), render_markdown(ctx)
     files = ReportFiles(out / "report.html", out / "report.md", out / "audit.json", [],
                         results, notes)

@@ -39,19 +39,38 @@ def _f(x: float) -> str:
     return f"{x:.1f}"
 
 
-def margin_svg(series: list[tuple[str, list]], title: str) -> str:
+def _with_worst(rows: list, worst: tuple | None) -> list[tuple[float, float | None]]:
+    """The plotted (time_s, value) points of a margin, the worst point (``worst``: its
+    ``(time_s, value)``, the verdict's robustness) among them: the margin the audit keeps is
+    thinned, and the worst one reported must lie on the line drawn."""
+    pts = [(t, _finite(v)) for _tick, t, v in rows if t is not None]
+    if worst is None or worst[0] is None or _finite(worst[1]) is None:
+        return pts
+    t_w, v_w = float(worst[0]), float(worst[1])
+    pts = [(t, v) for t, v in pts if t != t_w]
+    at = next((i for i, (t, _v) in enumerate(pts) if t > t_w), len(pts))
+    return pts[:at] + [(t_w, v_w)] + pts[at:]
+
+
+def margin_svg(series: list[tuple], title: str) -> str:
     """An SVG plot of margins over time.
 
     Args:
-        series: ``(run name, margin)`` per run, margin as in the audit JSON
-            (``[[tick, time_s, value], ...]``, value a number or ``"inf"`` / ``"-inf"``).
+        series: ``(run name, margin)`` or ``(run name, margin, worst)`` per run, margin as
+            in the audit JSON (``[[tick, time_s, value], ...]``, value a number or
+            ``"inf"`` / ``"-inf"``), ``worst`` the robustness' ``(time_s, value)`` (seconds
+            on the log clock) or None: drawn on the run's line and marked
+            (``circle[data-mark="worst"]``).
         title: the plot's title (escaped here).
 
     Returns:
         The ``<svg>`` element, or ``""`` when no run has a finite margin.
     """
-    pts = [(name, [(t, _finite(v)) for _tick, t, v in rows if t is not None])
-           for name, rows in series]
+    pts = [(item[0], _with_worst(item[1], item[2] if len(item) > 2 else None))
+           for item in series]
+    worsts = {item[0]: item[2] for item in series
+              if len(item) > 2 and item[2] is not None and _finite(item[2][1]) is not None
+              and item[2][0] is not None}
     values = [v for _n, rows in pts for _t, v in rows if v is not None]
     if not values:
         return ""
@@ -94,6 +113,12 @@ def margin_svg(series: list[tuple[str, list]], title: str) -> str:
         for ln in lines:
             out.append(f'<polyline fill="none" stroke="{color}" stroke-width="1.2" '
                        f'data-log="{_esc(name)}" points="{" ".join(ln)}"/>')
+        if name in worsts:
+            t_w, v_w = float(worsts[name][0]), float(worsts[name][1])
+            out.append(f'<circle cx="{_f(x(t_w))}" cy="{_f(y(v_w))}" r="3.5" fill="{color}" '
+                       f'data-mark="worst" data-log="{_esc(name)}" data-time-s="{t_w!r}" '
+                       f'data-value="{v_w!r}"><title>{_esc(name)}: worst margin '
+                       f"{v_w + 0.0:+.4g} at {t_w:.3f} s</title></circle>")
         out.append(f'<text x="{_X1 + 10}" y="{_Y0 + 10 + 14 * k}" fill="{color}">'
                    f"{_esc(name)}</text>")
     out.append("</svg>")

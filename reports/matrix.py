@@ -75,12 +75,15 @@ def _check_cells(check: dict | None) -> dict[str, str]:
     """Requirement id -> its ``fretc check`` result in one cell."""
     if check is None:
         return {}
-    from fretc.check.report import findings_rows  # lazy: only with a check document
+    from fretc.reports.check_section import check_context
 
     return {r["id"]: "; ".join([f"satisfiable {r['satisfiable']}",
                                 f"non-vacuous {r['non_vacuous']}",
-                                f"redundant {r['redundant']}"] + r["findings"])
-            for r in findings_rows(check)}
+                                f"redundant {r['redundant']}"]
+                               + [f"{f['kind']}: {f['message']}"
+                                  + (f" (witness {f['witness']})" if f["witness"] else "")
+                                  for f in r["findings"]])
+            for r in check_context(check)["rows"]}
 
 
 def _requirement_cells(req: dict, checks: dict, current) -> list[str]:
@@ -171,36 +174,92 @@ def _number(text: str) -> float:
         return float("inf")
 
 
+#: The matrix page's columns: one row per requirement and run (the verdict near the left,
+#: so a 1,400 px window shows it without scrolling), then one row per requirement with what
+#: repeats on each of its runs (its text, formalization, check result and monitor hash)
+_RUN_COLUMNS = ("requirement", "run", "verdict", "robustness", "stale", "rolled_up",
+                "tool_id", "parents")
+_REQUIREMENT_COLUMNS = ("requirement", "tool", "tool_id", "version", "text",
+                        "formalization", "check", "monitor_hash")
+_CSS = ("body{font-family:sans-serif;margin:1.5em;max-width:1350px}table{border-collapse:"
+        "collapse;font-size:90%}td,th{border:1px solid #bbb;padding:3px 6px;"
+        "vertical-align:top;overflow-wrap:anywhere}th{background:#eee;text-align:left}"
+        ".v-violated,.v-error{background:#fdd}.v-satisfied{background:#dfd}"
+        ".stale{font-weight:bold;color:#a00}td.hash{font-family:monospace;font-size:85%}"
+        "section.order{display:none}section.order:target{display:block}"
+        "section.order:last-of-type{display:block}"
+        "section.order:target~section.order:last-of-type{display:none}")
+
+
+def _anchor(requirement: str) -> str:
+    """The id of a requirement's row in the page's requirement table."""
+    return "req-" + "".join(c if c.isalnum() or c in "-_." else "_" for c in requirement)
+
+
+def _run_table(rows: list[MatrixRow], links: dict[str, str]) -> list[str]:
+    """The table of requirement x run rows (the order as given)."""
+    e = html.escape
+    out = ["<table><tr>"]
+    for c in _RUN_COLUMNS:
+        label = e(c.replace("_", " "))
+        out.append(f'<th><a href="#{links[c]}">{label}</a></th>' if c in links
+                   else f"<th>{label}</th>")
+    out.append("</tr>")
+    for r in rows:
+        cells = []
+        for name in _RUN_COLUMNS:
+            c = getattr(r, name)
+            if name == "requirement":
+                cells.append(f'<td><a href="#{e(_anchor(c))}">{e(c)}</a></td>')
+            elif name == "verdict":
+                cells.append(f'<td class="verdict">{e(c)}</td>')
+            elif name == "stale" and c == STALE:
+                cells.append(f'<td class="stale">{e(c)}</td>')
+            else:
+                cells.append(f"<td>{e(c)}</td>")
+        out.append(f'<tr class="v-{e(r.verdict.replace(" ", "-"))}">' + "".join(cells)
+                   + "</tr>")
+    out.append("</table>")
+    return out
+
+
+def _requirement_table(rows: list[MatrixRow]) -> list[str]:
+    """Each requirement once, with the cells its run rows share."""
+    e = html.escape
+    out = ['<h2 id="requirements">Requirements</h2><table><tr>'
+           + "".join(f"<th>{e(c.replace('_', ' '))}</th>" for c in _REQUIREMENT_COLUMNS)
+           + "</tr>"]
+    seen: set[str] = set()
+    for r in rows:
+        if r.requirement in seen:
+            continue
+        seen.add(r.requirement)
+        cells = [f'<td class="{"hash" if name == "monitor_hash" else name}">'
+                 f"{e(getattr(r, name))}</td>" for name in _REQUIREMENT_COLUMNS]
+        out.append(f'<tr id="{e(_anchor(r.requirement))}">' + "".join(cells) + "</tr>")
+    out.append("</table>")
+    return out
+
+
 def matrix_html(rows: list[MatrixRow], title: str = "Traceability matrix") -> str:
-    """A self-contained page of the matrix (inline CSS, no script), sortable by the header
-    links (module docstring); the first order (requirement) shows by default."""
+    """A self-contained page of the matrix (inline CSS, no script): the requirement x run
+    rows with their verdicts, sortable by the header links (module docstring; the first
+    order, requirement, shows by default), then each requirement once with its text,
+    formalization, check result and monitor hash (the CSV repeats them on every row)."""
     e = html.escape
     links = {col: anchor for anchor, col, _k in _SORTS}
     parts = ["<!DOCTYPE html>", '<html lang="en"><head><meta charset="utf-8">',
-             f"<title>{e(title)}</title><style>",
-             "body{font-family:sans-serif;margin:1.5em}table{border-collapse:collapse;"
-             "font-size:90%}td,th{border:1px solid #bbb;padding:3px 6px;vertical-align:top}"
-             "th{background:#eee}.v-violated,.v-error{background:#fdd}.v-satisfied"
-             "{background:#dfd}.stale{font-weight:bold;color:#a00}"
-             "section.order{display:none}section.order:target{display:block}"
-             "section.order:last-of-type{display:block}"
-             "section.order:target~section.order:last-of-type{display:none}",
+             f"<title>{e(title)}</title><style>", _CSS,
              "</style></head><body>", f"<h1>{e(title)}</h1>",
-             f"<p>{len(rows)} rows; sort by a linked column header.</p>"]
+             f"<p>{len(rows)} rows; sort by a linked column header; each requirement's text, "
+             'formalization, check result and monitor hash are in <a href="#requirements">'
+             "the requirement table</a> below.</p>"]
     orders = list(_SORTS[1:]) + [_SORTS[0]]  # the default order last (CSS above)
     for anchor, _col, key in orders:
-        ordered = sorted(enumerate(rows), key=lambda ir: (key(ir[1]), ir[0]))
-        parts.append(f'<section class="order" id="{anchor}"><table><tr>')
-        for c in COLUMNS:
-            label = e(c.replace("_", " "))
-            parts.append(f'<th><a href="#{links[c]}">{label}</a></th>' if c in links
-                         else f"<th>{label}</th>")
-        parts.append("</tr>")
-        for _i, r in ordered:
-            cells = astuple(r)
-            parts.append(f'<tr class="v-{e(r.verdict.replace(" ", "-"))}">' + "".join(
-                f'<td class="stale">{e(c)}</td>' if name == "stale" and c == STALE
-                else f"<td>{e(c)}</td>" for name, c in zip(COLUMNS, cells)) + "</tr>")
-        parts.append("</table></section>")
+        ordered = [r for _i, r in sorted(enumerate(rows), key=lambda ir: (key(ir[1]), ir[0]))]
+        parts.append(f'<section class="order" id="{anchor}">')
+        parts += _run_table(ordered, links)
+        parts.append("</section>")
+    parts += _requirement_table(rows)
     parts.append("</body></html>")
     return "\n".join(parts) + "\n"

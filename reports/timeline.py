@@ -133,7 +133,8 @@ class _Detail:
 
 
 def timeline_svg(verdict: dict, log: dict, *, period_ns: int | None = None,
-                 thresholds: Sequence[Threshold] = (), title: str = "") -> str:
+                 thresholds: Sequence[Threshold] = (), title: str = "",
+                 caption: str = "") -> str:
     """The SVG text (one ``<svg>`` element, UTF-8, no XML declaration) of a violated
     verdict's timeline.
 
@@ -146,6 +147,9 @@ def timeline_svg(verdict: dict, log: dict, *, period_ns: int | None = None,
             topic tick (the median spacing of the sampled ticks is used for cell widths).
         thresholds: comparison constants to dash in numeric lanes (:class:`Threshold`).
         title: the accessible title (``<title>``).
+        caption: the caption drawn at the top of the picture (``text.caption``), so that
+            the image alone names what it shows; default: the requirement id, its verdict,
+            the run (log file) and the first violation's time on the log clock.
 
     Returns:
         SVG text, deterministic for equal input.
@@ -155,7 +159,9 @@ def timeline_svg(verdict: dict, log: dict, *, period_ns: int | None = None,
     """
     lay = plan_timeline(verdict, log, period_ns, thresholds)
     svg = _Svg()
-    y = _draw_legend(svg, lay.x0, 6.0)
+    svg.add(f'<text class="caption" x="8" y="17" font-size="13" font-weight="bold" '
+            f'fill="{COLORS["text"]}">{escape(caption or _default_caption(verdict, lay))}</text>')
+    y = _draw_legend(svg, lay.x0, 30.0)
     y = _draw_overview(svg, lay, y)
     det = _draw_detail(svg, lay, y)
     y = _draw_detail_axis(svg, lay, det)
@@ -168,6 +174,12 @@ def timeline_svg(verdict: dict, log: dict, *, period_ns: int | None = None,
     body = [head, f"<title>{escape(title or _default_title(verdict, lay))}</title>",
             f'<rect x="0" y="0" width="{WIDTH}" height="{height}" fill="#ffffff"/>']
     return "\n".join(body + svg.parts + ["</svg>"]) + "\n"
+
+
+def _default_caption(verdict: dict, lay: Timeline) -> str:
+    return (f"{verdict.get('requirement')} {verdict.get('verdict') or 'violated'} on run "
+            f"{verdict.get('log')}: first violation at {format_offset(lay.viol_ns, lay.start)}"
+            " on the log clock")
 
 
 def _default_title(verdict: dict, lay: Timeline) -> str:

@@ -57,19 +57,22 @@ def cell_label(v: dict | None) -> tuple[str, str]:
     return verdict, text
 
 
-def _violation_facts(fv: dict) -> list[tuple[str, str]]:
+def _violation_facts(fv: dict, start_ns: int | None) -> list[tuple[str, str]]:
     """The facts of a first violation: where it was decided, its trigger, scope interval,
-    response window, obligation and reason."""
+    response window, obligation and reason; times in seconds on the log clock (since
+    ``start_ns``, the log's start), the deciding message's too."""
     out: list[tuple[str, str]] = []
     tick_s = fv.get("tick_time_s", fv.get("log_time_s"))
     base = fv.get("tick_time_base") or "log"
+    decided = format_offset(fv.get("log_time_ns"), start_ns, missing="")
+    if not decided and fv.get("log_time_s") is not None:
+        decided = format_seconds(fv.get("log_time_s"))
     out.append(("first violation", f"tick {fv['tick']} at {format_seconds(tick_s)} on the {base} "
-                                    f"clock (deciding message log time "
-                                    f"{fv['log_time_ns']} ns)"))
+                                    "clock" + (f" (deciding message at {decided} on the log "
+                                               "clock)" if decided and base != "log" else "")))
     t = fv.get("trigger")
     if t:
-        out.append(("trigger", f"tick {t['tick']} at {format_seconds(t.get('time_s'))} "
-                               f"(log time {t['time_ns']} ns)"))
+        out.append(("trigger", f"tick {t['tick']} at {format_seconds(t.get('time_s'))}"))
     sc = fv.get("scope_interval")
     if sc:
         out.append(("scope interval", f"ticks [{sc['start']['tick']}, {sc['end']['tick']}]"
@@ -87,18 +90,19 @@ def _violation_facts(fv: dict) -> list[tuple[str, str]]:
     return out
 
 
-def witness(v: dict) -> list[tuple[str, str]]:
+def witness(v: dict, start_ns: int | None = None) -> list[tuple[str, str]]:
     """(label, text) facts of a verdict's witness: the first violation, the LTL3 verdict,
-    the trigger counts, the later violations (at most 20 listed), the ticks, notes and
-    error."""
+    the trigger counts, the later violations (at most 20 listed), the worst margin, the
+    ticks, notes and error. Every time is in seconds on the log clock (since the log's
+    start, ``start_ns``, the integer ns of its first message, which the run names once);
+    no fact repeats an absolute log time."""
     fv = v.get("first_violation")
-    out = _violation_facts(fv) if fv else []
+    out = _violation_facts(fv, start_ns) if fv else []
     l3 = v.get("ltl3") or {}
     if l3.get("status"):
         txt = l3["status"]
         if l3.get("tick") is not None:
-            txt += (f" at tick {l3['tick']} ({format_seconds(l3.get('time_s'))}, "
-                    f"log time {l3['time_ns']} ns)")
+            txt += f" at tick {l3['tick']} ({format_seconds(l3.get('time_s'))})"
         out.append(("LTL3 (ft_inf)", txt))
     if v.get("triggers") is not None:
         out.append(("triggers", f"{v['triggers']} in {v.get('intervals')} scope interval(s), "
@@ -118,6 +122,10 @@ def witness(v: dict) -> list[tuple[str, str]]:
         out.append(("violations at", shown + (f", ... ({more} more ticks listed)"
                                               if more > 0 else "")
                     + (f"; {total} in all" if total > sum(n for _w, n in items[:20]) else "")))
+    rob = v.get("robustness") or {}
+    if rob.get("tick") is not None and isinstance(rob.get("value"), (int, float)):
+        out.append(("worst margin", f"{_signed(rob['value'])} at tick {rob['tick']} "
+                                    f"({format_seconds(rob.get('time_s'))})"))
     out.append(("ticks", f"{v.get('ticks_evaluated')} evaluated"
                          + (f", {v['warmup_ticks']} warm-up" if v.get("warmup_ticks") else "")
                          + (f" ({v['engine']} engine)" if v.get("engine") else "")))
@@ -126,6 +134,14 @@ def witness(v: dict) -> list[tuple[str, str]]:
     if v.get("error"):
         out.append(("error", v["error"]))
     return out
+
+
+def _signed(value: float | str) -> str:
+    """A margin as the report prints it: signed, 4 significant digits, or +inf/-inf."""
+    x = float(value) + 0.0
+    if x != x or x in (float("inf"), float("-inf")):
+        return {float("inf"): "+inf", float("-inf"): "-inf"}.get(x, "nan")
+    return f"{x:+.4g}"
 
 
 def _rows_by_tick(v: dict) -> dict[int, dict]:

@@ -144,3 +144,22 @@ def test_the_footer_states_the_origin_as_what_it_is():
     _, text = _marks(v, log, 100 * MS)
     assert "since the log's first tick" not in text
     assert f"since the log's start, its first message (t0 = {log['start_time_ns']} ns" in text
+
+
+def test_the_caption_names_requirement_run_verdict_and_time():
+    """A timeline pasted alone still says what it shows: its first text is the caption,
+    with the requirement, the run, the verdict and the violation's time on the log clock
+    (the verdict's own, not a constant)."""
+    for req, log_name, word, tick in (("Z1", "z.mcap", "violated", 43),
+                                      ("R7", "runs/a b.mcap", "violated", 41)):
+        v, log = _verdict(requirement=req, log=log_name, verdict=word)
+        v["first_violation"]["tick"] = tick
+        v["first_violation"]["log_time_ns"] = log["start_time_ns"] + tick * 100 * MS
+        root = ET.fromstring(timeline_svg(v, log, period_ns=100 * MS))
+        texts = [t for t in root.iter(f"{SVG}text")]
+        assert texts[0].get("class") == "caption"
+        cap = texts[0].text
+        assert cap.startswith(f"{req} {word} on run {log_name}: ")
+        assert f"at {tick / 10:.3f} s on the log clock" in cap
+        given = timeline_svg(v, log, period_ns=100 * MS, caption="mine <&>")
+        assert ET.fromstring(given).find(f"{SVG}text").text == "mine <&>"

@@ -97,16 +97,15 @@ def report_cmd(ctx: click.Context, logs: tuple[str, ...], requirements: tuple[st
         doc = json.loads(audit_json(results, plan.requirements_json(), plan.bindings_json(),
                                     input_errors, extra=plan.sources_json(),
                                     statistics=plan_statistics(plan, results)))
+    check = _check_document(check_json, ctx) if check_json else None
     try:
         files = write_report(doc, output, plan=plan, base=base, json_dir=json_dir,
-                             psl_map=psl_map, annotate_dir=annotate_dir, title=title)
+                             psl_map=psl_map, annotate_dir=annotate_dir, title=title,
+                             check=check)
     except ReportError as exc:
         click.echo(f"error: {exc}", err=True)
         ctx.exit(2)
         return
-    if check_json:  # fretc check findings beside the requirements (check/report.py)
-        from fretc.check.report import add_to_report, load_check  # lazy: only with --check
-        add_to_report(str(files.markdown), str(files.html), load_check(check_json))
     for n in files.notes:
         click.echo(f"note: {n}", err=True)
     s = doc.get("summary") or {}
@@ -122,6 +121,19 @@ def report_cmd(ctx: click.Context, logs: tuple[str, ...], requirements: tuple[st
         click.echo(f"wrote {r.output}: {r.messages} messages + {r.events} verdict events on "
                    f"/fretc/verdicts{extra}", err=True)
     ctx.exit(int(s.get("exit_code", 0) or 0))
+
+
+def _check_document(path: str, ctx: click.Context) -> dict | None:
+    """The ``fretc check -o`` document of ``--check``; exit 2 naming the file when it is not
+    one (its findings go into the report's "Check findings" section)."""
+    from fretc.check.report import load_check  # lazy: only with --check
+
+    try:
+        return load_check(path)
+    except (ValueError, OSError) as exc:  # (json.JSONDecodeError is a ValueError)
+        click.echo(f"error: --check {path}: {exc}", err=True)
+        ctx.exit(2)
+        return None
 
 
 #: The files ``fretc report -o DIR`` writes in DIR (:func:`fretc.reports.files.write_report`;
