@@ -113,7 +113,7 @@ def _timed(path: Path, engine: str, budget: int, **kw) -> tuple[float, str]:
     kinds = sorted({f.kind for f in r.findings})
     rz = r.realizability
     if rz:
-        kinds.append("realizable=" + ",".join(str(c["realizable"]) for c in rz["components"]))
+        kinds.append("realizable=" + ",".join(str(c["realizable"]) for c in rz["groups"]))
     return cpu() - t0, " ".join(kinds) or "no findings"
 
 
@@ -174,7 +174,7 @@ def _realizability(path: Path, engine: str, budget: int) -> tuple[float, str]:
     with SpotWorker(Budget(budget)) as worker:
         summary = check_realizability(Checker(items, worker, engine=engine), CheckResult(),
                                       ["p", "m"], ["q", "r", "speed"])
-    comp = summary["components"][0]
+    comp = summary["groups"][0]
     what = str(comp["realizable"])
     if comp["realizable"] is False:
         env = comp["environment"]
@@ -360,7 +360,7 @@ def large_set() -> None:
             docs.append(out.read_text())
             answers = {k: sorted({str(r[k]) for r in doc["requirements"]})
                        for k in ("satisfiable", "non_vacuous", "redundant")}
-            real = [c["realizable"] for c in doc["realizability"]["components"]]
+            real = [c["realizable"] for c in doc["realizability"]["groups"]]
             print(f"  run {run}: {cpu() - t0:.1f} s CPU ({time.perf_counter() - w0:.1f} s "
                   f"wall), peak {peak:.0f} MB, exit {code}; answers {answers}, realizable "
                   f"{real}; unknown queries {doc['unknown_queries']} of {doc['queries']}")
@@ -381,7 +381,7 @@ def every_part(args) -> None:
         kinds = {}
         for f in r.findings:
             kinds[f.kind] = kinds.get(f.kind, 0) + 1
-        print(f"  {group:<45} {len(entries):3d} reqs {len(r.components):3d} components "
+        print(f"  {group:<45} {len(entries):3d} reqs {len(r.groups):3d} groups "
               f"{dt:6.2f} s CPU  findings {kinds or '-'}  input errors "
               f"{len(r.input_errors)}  queries {r.queries} (unknown {r.unknown_queries})")
         for f in r.findings:
@@ -397,7 +397,7 @@ def every_part(args) -> None:
                            outputs=['stopped', 'stop_requested', 'forwarded_zero', 'linear_speed', 'angular_speed'])
     print(f"  Safe-ROS R1-R6: {cpu() - t0:.2f} s CPU, "
           + "; ".join(f"{','.join(c['requirements'])}: realizable={c['realizable']}"
-                      for c in r.realizability["components"]))
+                      for c in r.realizability["groups"]))
     for a, b in [(3, 3), (5, 5), (10, 10)]:
         text = "\n".join(s.format(a=a, b=b) for s in SIZED) + "\n"
         path = Path("/tmp") / f"fretc_bench_check_{a}_{b}.fret"
@@ -413,7 +413,7 @@ def every_part(args) -> None:
         t2 = cpu()
         full = check_requirements(compile_entries(load_requirements([path])), **io)
         t3 = cpu()
-        rz = r.realizability["components"]
+        rz = r.realizability["groups"]
         print(f"  10 requirements, bounds {a}/{b} ticks: realizability {max(0.0, (t2 - t1) - (t1 - t0)):.2f} s "
               f"CPU (satisfiability alone {t1 - t0:.2f} s; every check {t3 - t2:.2f} s), "
               + "; ".join(f"{len(c['requirements'])} reqs realizable={c['realizable']}"

@@ -243,8 +243,8 @@ def case_studies(corpus: Path) -> None:
         res = check_requirements(compiled, inputs=ins, outputs=outs, redundancy=False,
                                  vacuity=False)
         t_check = cpu() - t1
-        rz = res.realizability or {"components": []}
-        if not rz["components"] or not all(c["realizable"] is True for c in rz["components"]):
+        rz = res.realizability or {"groups": []}
+        if not rz["groups"] or not all(c["realizable"] is True for c in rz["groups"]):
             continue
         decided += 1
         t1 = cpu()

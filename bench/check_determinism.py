@@ -92,7 +92,7 @@ def _answers(doc: dict) -> dict:
     for r in doc.get("requirements", []):
         for k in ("satisfiable", "non_vacuous", "redundant"):
             got[(r["id"], k)] = r[k]
-    for c in (doc.get("realizability") or {}).get("components", []):
+    for c in (doc.get("realizability") or {}).get("groups", []):
         got[(",".join(c["requirements"]), "realizable")] = c["realizable"]
     return got
 

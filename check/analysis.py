@@ -6,16 +6,16 @@ requirements' pt monitors (:mod:`fretc.check.monitor_sat`) when every formula ha
 
 Everything is decided on the **ft_inf** formulas (infinite traces), with the comparisons
 abstracted by :mod:`fretc.check.numeric_abstraction` (its invariants are conjoined to every
-query). Requirements are split into **components**: two requirements are in one component
+query). Requirements are split into **groups**: two requirements are in one group
 when they share a variable (a numeric variable counts as shared through its comparisons).
 Formulas over disjoint variables are satisfiable together iff each is, so every question is
-asked per component, which keeps Spot's automata small.
+asked per group, which keeps Spot's automata small.
 
-Checks, per component (each query has the work and memory budgets of :mod:`fretc.check.budget`,
+Checks, per group (each query has the work and memory budgets of :mod:`fretc.check.budget`,
 counted by the engines, never in seconds; a query past them answers "unknown", and a check
 with an unknown answer says so rather than guessing):
 
-1. **Satisfiability** of each requirement and of the component.
+1. **Satisfiability** of each requirement and of the group.
 2. **Non-vacuity** (Beer et al., CAV 1997; Kupferman & Vardi, STTT 2003, vacuity with
    respect to the response): a run satisfies requirement R *vacuously* when R would hold
    there whatever its response does. With ``R[false]`` and ``R[true]`` the requirement with
@@ -25,13 +25,13 @@ with an unknown answer says so rather than guessing):
    ``set & trigger(R)`` is unsatisfiable while the set is satisfiable: whatever run meets
    all requirements never enters R's scope or never fires its condition. FRET's example
    ``in modeA ... always a`` with ``in modeA ... always !a`` is found this way.
-3. **Minimal conflicts**: for an unsatisfiable component, the minimal unsatisfiable subsets;
+3. **Minimal conflicts**: for an unsatisfiable group, the minimal unsatisfiable subsets;
    for a vacuous requirement, the minimal subsets containing it that are unsatisfiable with
    its trigger. Enumerated by size, smallest first, over connected subsets, within
    ``mus_budget`` subset checks (a cut enumeration says so; each subset says whether it is
    shown smallest, minimal, or not shown minimal).
 4. **Redundancy** (warning): a requirement implied by the other requirements of a
-   satisfiable component (``others & !R`` unsatisfiable), or holding on every run.
+   satisfiable group (``others & !R`` unsatisfiable), or holding on every run.
 
 Witness traces for the findings are built by :mod:`fretc.check.witness`, realizability by
 :mod:`fretc.check.realizability`.
@@ -55,11 +55,11 @@ if TYPE_CHECKING:
     from fretc.check.witness import Judge
     from fretc.compiler.build import Compiled
 
-#: the stages of a component's check, in order (each requirement alone, the set, each
+#: the stages of a group's check, in order (each requirement alone, the set, each
 #: requirement's non-vacuity, each one's redundancy), as :data:`Progress` names them
 STAGES = ("alone", "set", "vacuity", "redundancy")
 
-#: ``progress(stage, at, total, component, components)`` (:func:`check_requirements`)
+#: ``progress(stage, at, total, group, groups)`` (:func:`check_requirements`)
 Progress = Callable[[str, int, int, int, int], None]
 
 __all__ = ["STAGES", "Progress", "CheckItem", "CheckResult", "Finding", "Checker",
@@ -104,9 +104,9 @@ def check_requirements(compiled: Sequence[Compiled], *, budget: Budget | None = 
     are skipped with a note. ``engine``: one of :data:`ENGINES` (satisfiability queries;
     realizability: :mod:`fretc.check.safety_game` for safety requirements unless ``spot``).
     ``progress``: called before each query of the stages of :data:`STAGES` (a requirement
-    of a stage: before its query), as ``progress(stage, at, total, component, components)``
+    of a stage: before its query), as ``progress(stage, at, total, group, groups)``
     (counts from 1; ``fretc check`` shows it on a terminal: the redundancy stage of a
-    component of 57 requirements takes about 4 minutes).
+    group of 57 requirements takes about 4 minutes).
     Raises ``ValueError`` for another engine.
     """
     if witness_dir is not None and witness_judge is None:
@@ -177,7 +177,7 @@ def _figures(checker: Checker, worker: SpotWorker, result: CheckResult) -> None:
                                if checker.rescued else ""))
 
 
-def _no_progress(stage: str, done: int, total: int, component: int, components: int) -> None:
+def _no_progress(stage: str, done: int, total: int, group: int, groups: int) -> None:
     """A :data:`Progress` that shows nothing."""
 
 
@@ -185,20 +185,20 @@ def _run(ck: Checker, result: CheckResult, *, vacuity: bool, redundancy: bool,
          progress: Progress) -> None:
     status: dict[int, dict[str, Any]] = {x.index: {"id": x.id, "source": x.compiled.entry.source,
                         "line": x.compiled.entry.line, "text": x.compiled.text,
-                        "component": None, "satisfiable": None, "non_vacuous": None,
+                        "group": None, "satisfiable": None, "non_vacuous": None,
                         "redundant": None, "findings": []} for x in ck.items}
     for name, why in ck.numeric.uninterpreted():
         result.abstractions.append({"atom": name, "why": why})
-    comps = ck.components()
+    comps = ck.groups()
     for k, comp in enumerate(comps):
-        result.components.append(_ids(comp))
+        result.groups.append(_ids(comp))
         for x in comp:
-            status[x.index]["component"] = k
+            status[x.index]["group"] = k
 
         def say(stage: str, done: int, total: int, k: int = k) -> None:
             progress(stage, done, total, k + 1, len(comps))
 
-        _check_component(ck, comp, status, result, vacuity, redundancy, say)
+        _check_group(ck, comp, status, result, vacuity, redundancy, say)
     result.requirements = [status[x.index] for x in ck.items]
 
 
@@ -214,10 +214,10 @@ def _link_findings(result: CheckResult) -> None:
                     s["findings"].append(n)
 
 
-def _check_component(ck: Checker, comp: list[CheckItem], status: dict,
+def _check_group(ck: Checker, comp: list[CheckItem], status: dict,
                      result: CheckResult, vacuity: bool, redundancy: bool,
                      say: Callable[[str, int, int], None]) -> None:
-    """Check one component (requirements sharing variables): each requirement alone, the
+    """Check one group (requirements sharing variables): each requirement alone, the
     set, then (when the set is satisfiable) non-vacuity and redundancy; findings and notes
     go to ``result``, per-requirement answers to ``status``."""
     alone_bad = _check_alone(ck, comp, status, result, say)
@@ -253,7 +253,7 @@ def _check_alone(ck: Checker, comp: list[CheckItem], status: dict,
 
 def _check_set(ck: Checker, comp: list[CheckItem], status: dict, result: CheckResult,
                alone_bad: list) -> bool:
-    """Satisfiability of the component (minimal conflicting subsets when it is not);
+    """Satisfiability of the group (minimal conflicting subsets when it is not);
     True when it is satisfiable (the later checks are meaningful)."""
     whole = ck.sat([x.phi for x in comp]) if len(comp) > 1 else ck.sat([comp[0].phi])
     if len(comp) > 1 and whole is False and not alone_bad:
@@ -280,7 +280,7 @@ def _check_set(ck: Checker, comp: list[CheckItem], status: dict, result: CheckRe
         for x in comp:
             if whole is False:
                 status[x.index]["non_vacuous"] = None
-        result.notes.append("component " + ", ".join(_ids(comp)) + ": non-vacuity and "
+        result.notes.append("group " + ", ".join(_ids(comp)) + ": non-vacuity and "
                             "redundancy not checked ("
                             + ("the requirements conflict)" if whole is False else
                                "the satisfiability of the set is unknown)"))
@@ -328,7 +328,7 @@ def _check_vacuity(ck: Checker, comp: list[CheckItem], status: dict,
 
 def _check_redundancy(ck: Checker, comp: list[CheckItem], status: dict,
                       result: CheckResult, say: Callable[[str, int, int], None]) -> None:
-    """Is each requirement implied by the others of its component?"""
+    """Is each requirement implied by the others of its group?"""
     for i, x in enumerate(comp):
         say("redundancy", i + 1, len(comp))
         others = [y.phi for y in comp if y is not x]
@@ -340,7 +340,7 @@ def _check_redundancy(ck: Checker, comp: list[CheckItem], status: dict,
                 f"redundancy of {x.id} ({x.location}) unknown: " + WHY_UNKNOWN))
         if ans is False:
             if others:
-                msg = (f"{x.id} ({x.location}) is implied by the others of its component ("
+                msg = (f"{x.id} ({x.location}) is implied by the others of its group ("
                        + ", ".join(_ids([y for y in comp if y is not x])) + ")")
             else:
                 msg = f"{x.id} ({x.location}) holds on every run (on infinite traces)"

@@ -241,8 +241,8 @@ class Checker:
             self._cache[key] = got
         return got
 
-    # ---------------------------------------------------------------- components
-    def components(self) -> list[list[CheckItem]]:
+    # ---------------------------------------------------------------- groups
+    def groups(self) -> list[list[CheckItem]]:
         """Requirements grouped by shared variables (union-find), in input order."""
         parent = list(range(len(self.items)))
 

@@ -19,7 +19,7 @@ class Finding:
     """One result worth a user's attention.
 
     ``kind``: ``unsatisfiable`` (one requirement), ``conflict`` (a set), ``vacuous``,
-    ``redundant``, ``unrealizable``, ``unknown``, ``undeclared`` (a component's
+    ``redundant``, ``unrealizable``, ``unknown``, ``undeclared`` (a group's
     realizability not decided: a variable declared neither input nor output).
     ``severity``: ``error`` (exit 1), ``warning``, ``unknown`` (exit 1) or ``input`` (an
     input error: exit 2). ``requirements``: the ids it is about; ``subsets``: the
@@ -69,13 +69,13 @@ def subsets_text(names: list[list[str]], standing: list[str], noun: str) -> str:
 class CheckResult:
     """Everything ``fretc check`` found. ``requirements`` has one JSON-able status dict per
     requirement (``satisfiable``, ``non_vacuous``, ``redundant``: true / false / "unknown"
-    / None when not checked); ``components`` the ids per component; ``abstractions`` the
+    / None when not checked); ``groups`` the ids per group; ``abstractions`` the
     uninterpreted atoms; ``queries`` the solver queries, ``smt_queries`` those z3 answered,
     ``monitor_queries`` those the pt monitors' fixed points answered
     (:mod:`fretc.check.smt`), ``unknown_queries`` those past their budget or refused."""
 
     requirements: list[dict] = field(default_factory=list)
-    components: list[list[str]] = field(default_factory=list)
+    groups: list[list[str]] = field(default_factory=list)
     findings: list[Finding] = field(default_factory=list)
     abstractions: list[dict] = field(default_factory=list)
     notes: list[str] = field(default_factory=list)
@@ -101,11 +101,11 @@ class CheckResult:
 
     def to_json(self) -> dict:
         """The document of ``fretc check --json`` / ``-o``: tool, semantics, exit code, one status
-        per requirement, components, findings, abstractions, notes, realizability,
+        per requirement, groups, findings, abstractions, notes, realizability,
         witnesses, input errors and the query counts."""
         return {"tool": "fretc check", "semantics": "ft_inf (infinite traces); witnesses "
                 "on finite traces (ft)", "exit_code": self.exit_code,
-                "requirements": self.requirements, "components": self.components,
+                "requirements": self.requirements, "groups": self.groups,
                 "findings": [f.to_json() for f in self.findings],
                 "abstractions": self.abstractions, "realizability": self.realizability,
                 "witnesses": self.witnesses,

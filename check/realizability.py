@@ -1,28 +1,28 @@
 """Realizability of requirement sets for ``fretc check``.
 
 The FRET variables are split into **inputs** (the environment's: sensor-derived, e.g.
-``too_close``) and **outputs** (the component's, e.g. ``stopped``). As in FRET, which checks
-realizability only when every variable is declared, a component that reads a variable
+``too_close``) and **outputs** (the controller's, e.g. ``stopped``). As in FRET, which checks
+realizability only when every variable is declared, a group that reads a variable
 declared neither input nor output is not decided: an ``undeclared`` finding (an input error,
 exit 2) names each such variable with the requirements that read it and how to declare it,
-and the other components are decided. No role is ever assumed: taking a sensor reading
+and the other groups are decided. No role is ever assumed: taking a sensor reading
 (``clearance``) as the controller's would call ``always clearance > 0`` realizable. A set is
 *realizable* when a controller exists that, reading the inputs tick by tick, sets the
 outputs so that every requirement holds on every infinite run whatever the inputs do
 (Pnueli & Rosner, POPL 1989). As in FRET's realizability checking, the question is asked per
-connected component of requirements sharing variables.
+group of requirements sharing variables (a connected component of the graph of shared variables).
 
 Safety requirements are decided by the symbolic safety game of :mod:`fretc.check.safety_game`
 (their pt monitors, numeric outputs as constrained controller choices) unless the engine
-is ``spot``; an unrealizable safety part makes the component unrealizable; otherwise a
-component with a requirement that is not safety goes to Spot's game, as follows.
+is ``spot``; an unrealizable safety part makes the group unrealizable; otherwise a
+group with a requirement that is not safety goes to Spot's game, as follows.
 
-Each component's specification, on the ft_inf formulas with the numeric abstraction
+Each group's specification, on the ft_inf formulas with the numeric abstraction
 (:mod:`fretc.check.numeric_abstraction`), is ``inv_in -> (R1 & ... & Rn & inv_out)``: the
 invariants of input comparisons are assumptions on the environment, those of output
 comparisons obligations of the controller. A comparison is an output when it reads an output
 variable. Spot decides it with a synthesis game (``spot.ltl_to_game``, ``spot.solve_game``);
-for a realizable component the size of the Mealy machine Spot extracts
+for a realizable group the size of the Mealy machine Spot extracts
 (``spot.solved_game_to_mealy``) is reported. For an unrealizable one: the minimal
 unrealizable subsets (smallest first, within the budget) and, when one exists, a fixed input
 sequence (a lasso: prefix, then a cycle repeated forever) along which no output sequence
@@ -74,8 +74,8 @@ def _atom_vars(atom) -> list[str]:
 
 def check_realizability(checker: Checker, result: CheckResult, inputs: Sequence[str], outputs: Sequence[str]
                         ) -> dict:
-    """Decide realizability per component; append ``unrealizable`` / ``unknown`` findings
-    to ``result`` and return the JSON-able summary (module docstring). A component reading
+    """Decide realizability per group; append ``unrealizable`` / ``unknown`` findings
+    to ``result`` and return the JSON-able summary (module docstring). A group reading
     a variable in neither ``inputs`` nor ``outputs`` is not decided: its entry's
     ``realizable`` is None, its ``undeclared`` the variables with the requirements reading
     them, and an ``undeclared`` finding (severity ``input``: exit 2) says how to declare them.
@@ -95,16 +95,16 @@ def check_realizability(checker: Checker, result: CheckResult, inputs: Sequence[
     summary: dict[str, Any] = {"machine": MACHINE, "inputs": inputs, "outputs": outputs,
                "undeclared": [v for v in used if v not in declared],
                "unused": [v for v in inputs + outputs if v not in used],
-               "components": []}
+               "groups": []}
     decide = _Decider(checker, inputs)
-    for comp in checker.components():
+    for comp in checker.groups():
         entry: dict = {"requirements": _ids(comp)}
         readers = undeclared_variables(comp, declared)
-        if readers:  # (FRET's rule: no role assumed, the component not decided)
+        if readers:  # (FRET's rule: no role assumed, the group not decided)
             entry["realizable"] = None
             entry["undeclared"] = readers
             result.findings.append(_undeclared_finding(comp, readers))
-            summary["components"].append(entry)
+            summary["groups"].append(entry)
             continue
         ans = decide(comp)
         if ans == UNKNOWN:
@@ -125,7 +125,7 @@ def check_realizability(checker: Checker, result: CheckResult, inputs: Sequence[
                     entry[k] = ans[k]
         else:
             _unrealizable(checker, decide, comp, ans, inputs, entry, result)
-        summary["components"].append(entry)
+        summary["groups"].append(entry)
     result.notes.extend(decide.notes)
     return summary
 
@@ -146,7 +146,7 @@ def undeclared_variables(items: Sequence[Any], declared: set[str] | frozenset[st
 
 
 def _undeclared_finding(comp: Sequence[Any], readers: dict[str, list[str]]) -> Finding:
-    """The ``undeclared`` finding of a component whose realizability is not decided:
+    """The ``undeclared`` finding of a group whose realizability is not decided:
     ``readers`` (:func:`undeclared_variables`) in words, with the FRET kind an export gives
     a variable (an Internal or Mode variable fretc reads as a free one) and how to declare
     them. Its severity ``input`` makes the exit code 2 (an input error, as FRET refuses to
@@ -172,7 +172,7 @@ def _undeclared_finding(comp: Sequence[Any], readers: dict[str, list[str]]) -> F
            "(as FRET, realizability is checked only when every variable is the "
            "environment's or the controller's)")
     return Finding("undeclared", "input", involved, msg,
-                   details={"undeclared": readers, "component": _ids(comp)})
+                   details={"undeclared": readers, "group": _ids(comp)})
 
 
 class _Decider:
@@ -394,7 +394,7 @@ def _predicate_invariants(phis: Sequence[ir.Node], inputs: Sequence[str]
 
 def _unrealizable(checker, decide: _Decider, comp, ans: dict, inputs: list[str],
                   entry: dict, result) -> None:
-    """Fill ``entry`` for an unrealizable component (minimal unrealizable subsets, the
+    """Fill ``entry`` for an unrealizable group (minimal unrealizable subsets, the
     environment's input lasso, a controller's best effort along it) and append the finding
     to ``result``."""
     entry["realizable"] = False
@@ -407,7 +407,7 @@ def _unrealizable(checker, decide: _Decider, comp, ans: dict, inputs: list[str],
     entry["minimal_unrealizable"] = names
     entry["standing"] = found.standing
     entry["cut"] = cut
-    inputs = [v for v in inputs if v in _variables(comp)]  # (the component's own)
+    inputs = [v for v in inputs if v in _variables(comp)]  # (the group's own)
     env = _environment(checker, ans["counter"], inputs, ans["note"])
     entry["environment"] = env
     if ans["run"]:

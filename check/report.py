@@ -28,7 +28,11 @@ def _yn(v) -> str:
 
 def findings_rows(doc: dict) -> list[dict]:
     """One row per requirement: ``id``, ``source``, ``satisfiable``, ``non_vacuous``,
-    ``redundant``, ``findings`` (texts ``KIND: message``)."""
+    ``redundant``, ``findings`` (texts ``KIND: message``); a project checked per FRET
+    component (``"fret_components"``, :func:`fretc.check.fret_components.project_json`):
+    the rows of each component's check, in the components' order."""
+    if "fret_components" in doc:
+        return [row for c in doc["fret_components"] for row in findings_rows(c["check"])]
     rows = []
     for r in doc.get("requirements", []):
         texts = [f"{doc['findings'][k]['kind']}: {doc['findings'][k]['message']}"

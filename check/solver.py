@@ -123,7 +123,7 @@ class _Session:
     the process, or the parent a worker was forked from, registered before, and the words
     Spot finds depend on it), and the automata built in it: one per conjunct of a ``sat``
     query (``automata``) and the products of the bases (``products``), shared by the
-    queries of one component."""
+    queries of one group."""
 
     def __init__(self) -> None:
         import spot  # lazy: Spot loads in the query worker process only
@@ -151,7 +151,7 @@ class _Session:
         # one automaton per conjunct (deterministic when Spot finds a small one), then
         # their product, smallest first: far smaller than translating the conjunction when
         # the conjuncts are many. The product of the base is kept: the queries of one
-        # component share it (non-vacuity adds one trigger to the same base).
+        # group share it (non-vacuity adds one trigger to the same base).
         key = tuple(sorted(base))
         aut = self.products.get(key)
         if aut is None:

@@ -306,7 +306,7 @@ def _controller_run(w: _Witnesses, finding, path: Path) -> None:
 
 class _Witnesses:
     """Finite traces for the findings of one check: the requirement items, their columns,
-    the components and the requirement files (for the replay command)."""
+    the groups and the requirement files (for the replay command)."""
 
     def __init__(self, checker, judge: Judge):
         self.checker = checker
@@ -318,14 +318,14 @@ class _Witnesses:
         for x in self.items:
             if x.compiled.entry.source not in self.sources:
                 self.sources.append(x.compiled.entry.source)
-        self.comps = checker.components()
+        self.comps = checker.groups()
 
     @staticmethod
     def trig(x) -> list:
         return [x.trigger_ft] if x.trigger_ft is not None else []
 
     def filler(self, comp) -> list:
-        """Formula variants for a component: a run meeting it, triggers firing (else not)."""
+        """Formula variants for a group: a run meeting it, triggers firing (else not)."""
         phis = [x.phi_ft for x in comp]
         return [phis + [t for x in comp for t in self.trig(x)], phis]
 
@@ -340,8 +340,8 @@ class _Witnesses:
         return None
 
     def attempt(self, variants):
-        """Rows meeting ``variants`` (first that works) on its component, and the other
-        components filled with runs of the same length that meet them."""
+        """Rows meeting ``variants`` (first that works) on its group, and the other
+        groups filled with runs of the same length that meet them."""
         main = self.one(variants)
         if main in (None, UNKNOWN):
             return main

@@ -93,8 +93,9 @@ def duration_ticks(d: A.Duration, tick_period: Fraction | None,
     elif tick_period is None:
         ticks = amount
         warnings.append(
-            f"'{d.amount} {d.unit}' read as {d.amount} ticks (FRET ignores units); declare a "
-            "tick period (tick_period: 100 ms) to convert time units exactly")
+            f"'{d.amount} {d.unit}' read as {d.amount} ticks (FRET ignores units); give a "
+            "tick period (--tick-period 100ms, or '@tick_period 100 ms' in a .fret file) to "
+            "convert time units exactly")
     else:
         ticks = amount * A.UNIT_SECONDS[d.unit] / tick_period
     named = f"{d.name} = " if d.name else ""

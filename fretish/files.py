@@ -398,7 +398,8 @@ def _load_json(path: str) -> list[RequirementEntry]:
             origin=fret_origin(source, obj))
         try:
             from fretc.fretish.parser import parse  # lazy: as _FretReader
-            entry.requirement = parse(text, source=source, line=line, column=col)
+            entry.requirement = parse(text, source=source, line=line, column=col,
+                                      letters_as_names=True)  # (FRET's names: T)
         except FretishSyntaxError as e:
             entry.error = e
         if declared and entry.requirement is not None:

@@ -77,11 +77,11 @@ SHORT_TEXT_NO_NUMBER = min(MAX_EXPR_NODES, (MAX_EXPR_DEPTH - 1) * 3 // CALL_DEPT
 _NUMBER_RUN = re.compile(f"[0-9][0-9.eE+-]{{{MAX_NUMBER_CHARS - 2}}}")
 
 
-def check_requirement(req: A.Requirement) -> None:
+def check_requirement(req: A.Requirement, letter_names: frozenset[int] = frozenset()) -> None:
     """Check a parsed requirement against the limits (iteratively: any depth is safe) and
-    FRET's reserved names (:func:`check_reserved`). Raises :class:`LimitError` at the first
-    node beyond a limit or reserved."""
-    check_reserved(req)
+    FRET's reserved names (:func:`check_reserved`; ``letter_names`` as there). Raises
+    :class:`LimitError` at the first node beyond a limit or reserved."""
+    check_reserved(req, letter_names)
     n = len(req.text)
     if n > SHORT_TEXT and (n > SHORT_TEXT_NO_NUMBER or _NUMBER_RUN.search(req.text)):
         count = [0]
@@ -101,13 +101,14 @@ _RESERVED_WORD = re.compile(r"(?<![A-Za-z0-9_])(" + "|".join(sorted(FRET_RESERVE
                             + r")(?![A-Za-z0-9_])")
 
 
-def check_reserved(req: A.Requirement) -> None:
+def check_reserved(req: A.Requirement, letter_names: frozenset[int] = frozenset()) -> None:
     """FRET's rule on names (../shared/fretish/README.md section 5): a variable or function
     named by one of NuSMV's or R2U2's reserved words (:data:`fretc.fretish.words.FRET_RESERVED`,
     case sensitive: ``count``, ``abs``, ``min``, ``init``, ``E``, ``R``, ...) is refused with
     FRET's message; a quoted one (``"count"``) is not (FRET prints it ``_DQT_count_DQT_``,
-    and so does :func:`fretc.compiler.printers.mangle`). Raises :class:`LimitError` at the first
-    such name."""
+    and so does :func:`fretc.compiler.printers.mangle`); nor is a letter read as a name from a
+    FRET export (``letter_names``: the offsets of those names in the text, which FRET
+    formalized and fretc prints quoted). Raises :class:`LimitError` at the first such name."""
     if not _RESERVED_WORD.search(req.text):
         return
     for root in _expressions(req):
@@ -116,6 +117,7 @@ def check_reserved(req: A.Requirement) -> None:
             e = stack.pop()
             name = getattr(e, "name", None)
             if (type(e) in (A.Var, A.Call) and name in FRET_RESERVED
+                    and e.span.start not in letter_names
                     and not req.text[e.span.start:e.span.end].lstrip("( \t").startswith('"')):
                 raise LimitError(e.span, "These reserved letter combinations cannot be used: "
                                  f"{name}", _reserved_hint(name, type(e) is A.Call))

@@ -139,10 +139,13 @@ class _Builder:
     def __init__(self):
         self.begin("", 1, 1)
 
-    def begin(self, text: str, line: int, column: int) -> None:
-        """Parse ``text``, whose first character is at file ``line``, ``column``."""
+    def begin(self, text: str, line: int, column: int, letters_as_names: bool = False) -> None:
+        """Parse ``text``, whose first character is at file ``line``, ``column``;
+        ``letters_as_names``: a reserved letter in an expression is a variable (:func:`parse`)."""
         self.text, self.dl, self.dc = text, line - 1, column - 1
         self.pending: list[_Fail] = []   # errors reported when their expression ends
+        self.letters_as_names = letters_as_names
+        self.letter_names: set[int] = set()  # (the offsets of the letters read as names)
 
     def span(self, x) -> A.Span:
         """The span of a token (file coordinates: the text's first line is shifted by its
@@ -199,6 +202,10 @@ class _Builder:
     def reserved(self, c):
         t = c[0]
         w = t.value
+        if self.letters_as_names and w in RESERVED_LETTERS:
+            span = self.span(t)
+            self.letter_names.add(span.start)
+            return A.Var(w, span)
         if w.lower() == "what":
             raise _Fail(self.span(t), "'what' is a reserved word in FRETish (probability "
                         "queries)", f"quote it (\"{w}\") or rename the variable")
@@ -445,7 +452,8 @@ _lock = threading.Lock()
 _parser: lark.Lark | None = None
 
 
-def _run(start: str, text: str, source: str, line: int, column: int):
+def _run(start: str, text: str, source: str, line: int, column: int,
+         letters_as_names: bool = False):
     global _parser
     if not isinstance(text, str):
         raise TypeError(f"parse() wants a str, got {type(text).__name__}")
@@ -453,12 +461,12 @@ def _run(start: str, text: str, source: str, line: int, column: int):
         if _parser is None:
             _parser = cached_lark()
         builder = cast(_Builder, _parser.options.transformer)
-        builder.begin(text, line, column)
+        builder.begin(text, line, column, letters_as_names)
         try:
             # the transformer (_Builder) makes the tree the AST: a Requirement or an Expr
             result = cast(Any, _parser.parse(text, start=start))
             if start == "start":
-                check_requirement(result)
+                check_requirement(result, frozenset(builder.letter_names))
             else:
                 check_expression(result)
             return result
@@ -476,7 +484,7 @@ def _run(start: str, text: str, source: str, line: int, column: int):
 
 
 def parse(text: str, *, source: str = "<string>", line: int = 1,
-          column: int = 1) -> A.Requirement:
+          column: int = 1, letters_as_names: bool = False) -> A.Requirement:
     """Parse one FRETish requirement sentence.
 
     ``text`` is the sentence (a trailing ``.`` is allowed); ``source``, ``line`` and
@@ -490,8 +498,15 @@ def parse(text: str, *, source: str = "<string>", line: int = 1,
     ../shared/fretish/README.md section 7),
     including a probability outside [0, 1], a reserved word used as a name and
     ``preBool`` with a numeric initial value.
+
+    ``letters_as_names``: the letters fretc reserves for the operators of FRET's printed
+    formulas (``X F G U V Y Z H O S T``, :data:`fretc.fretish.words.RESERVED_LETTERS`) are
+    variables where an expression names them, as in FRET's own grammar, which has no such
+    operator (a FRET export: FRET formalized ``T * mag(Vt + Vv)`` in its case studies). The
+    name is the letter; the printers quote it (``T`` prints ``_DQT_T_DQT_``), so no printed
+    formula reads it as an operator.
     """
-    return _run("start", text, source, line, column)
+    return _run("start", text, source, line, column, letters_as_names)
 
 
 def parse_expression(text: str, *, source: str = "<string>", line: int = 1,

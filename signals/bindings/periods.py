@@ -55,16 +55,21 @@ def time_unit_duration(entry: Any) -> str | None:
 
 
 def with_periods(entries: Sequence[Any], bindings: Bindings | None,
-                 found: str = "") -> list[Any]:
+                 found: str = "", override: Fraction | None = None) -> list[Any]:
     """``entries`` (:class:`fretc.fretish.entry.RequirementEntry`) each with the tick period
     its durations convert with (module docstring): its own, else the bindings'.
     ``found``: how the bindings were found, for the messages (``"-b"``, or the path of a
-    file beside the requirements).
+    file beside the requirements). ``override``: ``--tick-period`` in seconds, the period of
+    every entry (as in ``fretc audit``, where it overrides the bindings and the files; the
+    one way to give a FRET export, which cannot declare ``@tick_period``, a period without
+    a binding file).
 
     Raises:
         InputError: a requirement with a duration in time units and no period known, or a
             declared period that differs from the bindings' (every such requirement named
             with its file and line)."""
+    if override is not None:
+        return [dataclasses.replace(e, tick_period=override) for e in entries]
     period = bindings_period(bindings)
     src = f"{bindings.source}{f' ({found})' if found else ''}" if bindings is not None else ""
     out, errors = [], []
@@ -83,19 +88,31 @@ def with_periods(entries: Sequence[Any], bindings: Bindings | None,
             if unit is not None:
                 errors.append(f"{e.source}:{e.line}: {e.id}: '{unit}' is a duration in time "
                               "units and no tick period is known to count it in ticks: "
-                              + _no_period(bindings, src))
+                              + _no_period(bindings, src, fret_export=_is_export(e)))
             out.append(e)
     if errors:
         raise InputError("\n".join(errors))
     return out
 
 
-def _no_period(bindings: Bindings | None, src: str) -> str:
-    """What to give when no period is known (the message's end)."""
+def _is_export(entry: Any) -> bool:
+    """Is ``entry`` read from a JSON file (a FRET export, which has no ``@tick_period``)?"""
+    return str(entry.source).lower().endswith(".json")
+
+
+def _no_period(bindings: Bindings | None, src: str, fret_export: bool = False) -> str:
+    """What to give when no period is known (the message's end), for the file given: a FRET
+    export cannot declare ``@tick_period``, so only ``--tick-period`` and ``-b`` are named
+    for one."""
     if bindings is not None and bindings.tick.topic:
         return (f"the bindings {src} tick once per {bindings.tick.topic} message and give "
-                "no nominal_rate in [tick]; add it, or declare '@tick_period 100 ms' in the "
-                "requirements file")
-    return ("declare one in the requirements file ('@tick_period 100 ms'), or give a binding "
-            "file whose [tick] period gives it (-b, or X.bindings.toml beside X.fret); FRET "
-            "would read it as that many ticks")
+                "no nominal_rate in [tick]; add it, or give --tick-period 100ms"
+                + ("" if fret_export else
+                   ", or declare '@tick_period 100 ms' in the requirements file"))
+    if fret_export:
+        return ("give --tick-period 100ms, or a binding file whose [tick] period gives it "
+                "(-b); a FRET export holds no tick period, and FRET would read it as that "
+                "many ticks")
+    return ("declare one in the requirements file ('@tick_period 100 ms'), give "
+            "--tick-period 100ms, or a binding file whose [tick] period gives it (-b, or "
+            "X.bindings.toml beside X.fret); FRET would read it as that many ticks")

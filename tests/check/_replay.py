@@ -37,7 +37,7 @@ def replayed_unrealizable(req: Path, inputs: list[str], method: str, tmp_path: P
     compiled = compile_entries(load_requirements([req]))
     r = check_requirements(compiled, inputs=inputs, outputs=rest_as_outputs(compiled, inputs),
                            witness_dir=str(tmp_path / "w"), witness_judge=verdict_of)
-    comp = r.realizability["components"][0]
+    comp = r.realizability["groups"][0]
     assert comp["realizable"] is False and comp["method"] == method, comp
     found = [f for f in r.findings if f.kind == "unrealizable"]
     assert found and found[0].witness, r.findings

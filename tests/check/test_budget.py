@@ -227,7 +227,7 @@ def test_lost_game_at_a_thousand_ticks_has_its_fixed_defeating_input(tmp_path):
                     encoding="utf-8")
     r = check_requirements(compile_entries(load_requirements([path])), redundancy=False,
                            vacuity=False, inputs=["req", "halt"], outputs=["done"])
-    (comp,) = r.realizability["components"]
+    (comp,) = r.realizability["groups"]
     assert comp["realizable"] is False and comp["method"] == "Büchi game"
     env = comp["environment"]
     assert "prefix" in env, env

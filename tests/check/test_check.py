@@ -44,7 +44,7 @@ def test_consistent_set_has_no_finding(tmp_path):
     r = _check(p)
     assert r.findings == [] and r.exit_code == 0
     assert all(s["satisfiable"] is True and s["non_vacuous"] is True for s in r.requirements)
-    assert r.components == [["C1", "C2"], ["C3", "C4"]]
+    assert r.groups == [["C1", "C2"], ["C3", "C4"]]
 
 
 def test_fret_non_vacuity_example(tmp_path):
@@ -126,18 +126,18 @@ def test_satisfiable_but_unrealizable(tmp_path):
     r = check_requirements(compile_entries(entries), inputs=["too_close"],
                            outputs=["stopped"])
     assert _kinds(r) == [("unrealizable", ("U2",))]
-    comp = r.realizability["components"][0]
+    comp = r.realizability["groups"][0]
     assert comp["realizable"] is False and comp["minimal_unrealizable"] == [["U2"]]
     env = comp["environment"]
     assert any(row["too_close"] is False for row in env["prefix"] + env["cycle"])
     # the same set with too_close an output is realizable
     r2 = check_requirements(compile_entries(entries), inputs=[], outputs=["stopped",
                                                                           "too_close"])
-    assert r2.findings == [] and r2.realizability["components"][0]["strategy"][
+    assert r2.findings == [] and r2.realizability["groups"][0]["strategy"][
         "state_bits"] >= 1
     r3 = check_requirements(compile_entries(entries), inputs=[], engine="spot",
                             outputs=["stopped", "too_close"])
-    assert r3.findings == [] and r3.realizability["components"][0]["mealy_states"] >= 1
+    assert r3.findings == [] and r3.realizability["groups"][0]["mealy_states"] >= 1
 
 
 def test_reactive_environment_needs_no_fixed_sequence(tmp_path):
@@ -220,7 +220,7 @@ def test_safe_ros_requirements(tmp_path):
     assert [(f["kind"], f["requirements"]) for f in doc["findings"]] == [
         ("unrealizable", ["R5"])]
     assert {tuple(c["requirements"]): c["realizable"]
-            for c in doc["realizability"]["components"]} == {
+            for c in doc["realizability"]["groups"]} == {
         ("R1", "R2"): True, ("R3", "R6"): True, ("R4",): True, ("R5",): False}
 
 
@@ -308,7 +308,7 @@ def test_progress_names_each_stage_and_query_in_order(tmp_path):
                "K2: the sw shall always satisfy !k\n")
     calls: list[tuple] = []
     r = _check(p, progress=lambda *a: calls.append(a))
-    assert r.components == [["C1", "C2", "C3"], ["K1", "K2"]]
+    assert r.groups == [["C1", "C2", "C3"], ["K1", "K2"]]
     want = ([("alone", i, 3, 1, 2) for i in (1, 2, 3)] + [("set", 1, 1, 1, 2)]
             + [("vacuity", i, 3, 1, 2) for i in (1, 2, 3)]
             + [("redundancy", i, 3, 1, 2) for i in (1, 2, 3)]

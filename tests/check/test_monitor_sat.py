@@ -168,7 +168,7 @@ def test_finally_is_not_taken_for_its_pt_formula(tmp_path):
                  "B: the sw shall always satisfy !r\n", encoding="utf-8")
     r = check_requirements(compile_entries(load_requirements([p])), inputs=["p"],
                            outputs=["r"])
-    assert r.realizability["components"][0]["realizable"] is True
+    assert r.realizability["groups"][0]["realizable"] is True
 
 
 def test_deadlines_of_250_ticks_are_decided_with_a_replayed_witness(tmp_path):

@@ -32,7 +32,7 @@ def realizability_of(tmp_path: Path, text: str, inputs: list[str]) -> dict:
         r = check_requirements(compiled, inputs=inputs,
                                outputs=rest_as_outputs(compiled, inputs),
                                vacuity=False, redundancy=False, worker=worker)
-    return r.realizability["components"][0]
+    return r.realizability["groups"][0]
 
 
 def test_a_controller_cannot_make_x_below_y_and_y_below_x(tmp_path: Path) -> None:

@@ -48,7 +48,7 @@ def realizability_of(tmp_path: Path, text: str, inputs: list[str]) -> dict:
     compiled = compile_entries(load_requirements([p]))
     r = check_requirements(compiled, inputs=inputs, outputs=rest_as_outputs(compiled, inputs),
                            vacuity=False, redundancy=False)
-    return r.realizability["components"][0]
+    return r.realizability["groups"][0]
 
 
 def _decide(items, engine: str, worker):
@@ -122,14 +122,14 @@ def test_hundreds_of_ticks(tmp_path):
                  "B: upon p the sw shall for 197 ticks satisfy !q\n", encoding="utf-8")
     r = check_requirements(compile_entries(load_requirements([p])), inputs=["p"],
                            outputs=["q"], vacuity=False, redundancy=False)
-    comp = r.realizability["components"][0]
+    comp = r.realizability["groups"][0]
     assert comp["realizable"] is False and comp["minimal_unrealizable"] == [["A", "B"]]
     prefix = comp["environment"]["prefix"]
     assert prefix[0]["p"] is True and sum(row["p"] for row in prefix) == 2
     p.write_text("A: whenever p the sw shall within 200 ticks satisfy q\n", encoding="utf-8")
     r = check_requirements(compile_entries(load_requirements([p])), inputs=["p"],
                            outputs=["q"], vacuity=False, redundancy=False)
-    comp = r.realizability["components"][0]
+    comp = r.realizability["groups"][0]
     # the deadline is one counter of the oldest pending trigger's age (9 bits for 0..201),
     # not a delay line of 200 bits
     assert comp["realizable"] is True and comp["strategy"]["state_bits"] < 16

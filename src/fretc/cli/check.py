@@ -26,13 +26,16 @@ from __future__ import annotations
 import contextlib
 import json
 import sys
-from typing import TYPE_CHECKING
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
 
 import click
 
 from fretc.check.budget import MUS_BUDGET
+from fretc.common.textsafe import file_stems
 
-from fretc.cli.options import (TEXT_ATTRIBUTE_OPTION, FiniteRange, budget_options, io_options,
+from fretc.cli.options import (TEXT_ATTRIBUTE_OPTION, TICK_PERIOD_OPTION, FiniteRange,
+                               budget_options, io_options,
                                names_of, requirement_set, selection_options,
                                set_bindings_option, shown)
 
@@ -59,7 +62,7 @@ def render_text(result: CheckResult) -> str:
                      + "; outputs " + (", ".join(rz["outputs"]) or "-")
                      + (("; declared neither: " + ", ".join(rz["undeclared"]))
                         if rz["undeclared"] else ""))
-        for c in rz["components"]:
+        for c in rz["groups"]:
             status = c["realizable"]
             extra = ""
             if "undeclared" in c:
@@ -107,8 +110,8 @@ def render_text(result: CheckResult) -> str:
         lines.append(f"abstraction: {a['atom']}: {a['why']} (a finding may be spurious)")
     for n in result.notes:
         lines.append(f"note: {n}")
-    lines.append(f"{len(result.requirements)} requirements, {len(result.components)} "
-                 f"components, {result.queries} solver queries ({result.smt_queries} by z3, "
+    lines.append(f"{len(result.requirements)} requirements, {len(result.groups)} "
+                 f"group{'s' * (len(result.groups) != 1)} sharing no variable, {result.queries} solver queries ({result.smt_queries} by z3, "
                  f"{result.monitor_queries} by pt monitors)"
                  + (f" ({result.unknown_queries} past their budget or refused)"
                     if result.unknown_queries else "") + f"; exit {result.exit_code}")
@@ -147,6 +150,7 @@ def _lasso(prefix, cycle) -> str:
             "Component variables (realizability); default: @outputs of the files, or a FRET "
             "export's Output variables.")
 @set_bindings_option("A binding file; fretc check reads its tick period only.")
+@TICK_PERIOD_OPTION
 @selection_options
 @click.option("--json", "as_json", is_flag=True, help="Print the result as JSON.")
 @click.option("--witness-dir", type=click.Path(file_okay=False), default=None,
@@ -168,22 +172,19 @@ def _lasso(prefix, cycle) -> str:
 @click.option("--no-redundancy", is_flag=True, help="Skip the redundancy warnings.")
 @click.option("--no-progress", is_flag=True,
               help="No progress display (shown on a terminal: stage and query of each "
-              "component).")
+              "group of requirements sharing variables).")
 @click.option("-o", "--output", type=click.Path(dir_okay=False), default=None,
               help="Also write the JSON result to FILE (for fretc report --check).")
 @TEXT_ATTRIBUTE_OPTION
 def check_cmd(files: tuple[str, ...], inputs: str | None, outputs: str | None,
-              bindings_file: str | None, component: str | None, only: str | None,
-              exclude: str | None, as_json: bool, witness_dir: str | None, budget: int,
+              bindings_file: str | None, tick_period: str | None, component: str | None,
+              only: str | None, exclude: str | None, as_json: bool, witness_dir: str | None, budget: int,
               memory_budget: int, query_cpu: float, mus_budget: int, timeout: float | None,
               engine: str, no_redundancy: bool, no_progress: bool, output: str | None) -> None:
     """Check requirement FILES for conflicts, vacuity, redundancy and (with inputs/outputs)
-    realizability."""
-    # lazy: the compiler (Lark tables, Spot) only when the command runs
-    from fretc.compiler.build import compile_entries
+    realizability; a FRET project of several components, one component at a time."""
     import time
 
-    from fretc.check.analysis import check_requirements
     from fretc.check.budget import Budget, RunStopped
     from fretc.check.realizability import RealizabilityError
 
@@ -196,25 +197,18 @@ def check_cmd(files: tuple[str, ...], inputs: str | None, outputs: str | None,
                                req_files + [("the binding file", bindings_file)],
                                [("--witness-dir", witness_dir)], req_folders)
     rs = requirement_set(files, bindings_file, component=component, only=only,
-                         exclude=exclude)
+                         exclude=exclude, tick_period=tick_period)
     ins, outs = names_of(inputs), names_of(outputs)
-    ins = rs.inputs if ins is None else ins
-    outs = rs.outputs if outs is None else outs
-    fret_notes = rs.notes
-    compiled = compile_entries(rs.entries)
-    judge = None
-    if witness_dir is not None:  # the witnesses' expected verdicts: the audit's evidence
-        from fretc.monitors.interval import verdict_of
-        judge = verdict_of
-    deadline = None if timeout is None else time.monotonic() + timeout
-    shown_progress = _CheckProgress() if not no_progress and sys.stderr.isatty() else None
+    settings = _Settings(Budget(budget, memory_budget, query_cpu), mus_budget,
+                         not no_redundancy, engine,
+                         None if timeout is None else time.monotonic() + timeout,
+                         _CheckProgress() if not no_progress and sys.stderr.isatty() else None)
+    parts = rs.by_component() if component is None and ins is None and outs is None else []
     try:
-        with shown_progress or contextlib.nullcontext():
-            result = check_requirements(
-                compiled, budget=Budget(budget, memory_budget, query_cpu),
-                mus_budget=mus_budget, redundancy=not no_redundancy, witness_dir=witness_dir,
-                inputs=ins, outputs=outs, witness_judge=judge, engine=engine,
-                deadline=deadline, progress=shown_progress)
+        if parts:  # (a FRET project: FRET's table, a check per component)
+            _check_project(parts, settings, witness_dir, as_json, output)
+        result = _checked(rs, rs.inputs if ins is None else ins,
+                          rs.outputs if outs is None else outs, settings, witness_dir)
     except RealizabilityError as exc:
         click.echo(shown(f"error: {exc}"), err=True)
         sys.exit(2)
@@ -223,9 +217,6 @@ def check_cmd(files: tuple[str, ...], inputs: str | None, outputs: str | None,
                    "time, no report (the answers do not depend on time: rerun with a larger "
                    "--timeout or none)", err=True)
         sys.exit(3)
-    for e in result.input_errors:
-        click.echo(shown(str(e)), err=True)
-    result.notes += fret_notes  # (a FRET export's declarations: what is not used is said)
     doc = result.to_json()
     if output:
         from fretc.common.outputs import write_file
@@ -236,6 +227,76 @@ def check_cmd(files: tuple[str, ...], inputs: str | None, outputs: str | None,
     else:
         click.echo(shown(render_text(result)))
     sys.exit(result.exit_code)
+
+
+@dataclass
+class _Settings:
+    """The options of one ``fretc check`` run that every checked set shares."""
+
+    budget: Any
+    mus_budget: int
+    redundancy: bool
+    engine: str
+    deadline: float | None
+    progress: Any
+
+
+def _checked(rs: Any, ins: list[str] | None, outs: list[str] | None, settings: _Settings,
+             witness_dir: str | None) -> CheckResult:
+    """The check of the requirement set ``rs`` (:class:`fretc.cli.options.RequirementSet`)
+    with inputs ``ins`` and outputs ``outs`` (None: no realizability); its compile errors
+    printed, its FRET export's notes added. Raises what
+    :func:`fretc.check.analysis.check_requirements` raises."""
+    from fretc.check.analysis import check_requirements
+    from fretc.compiler.build import compile_entries
+
+    compiled = compile_entries(rs.entries)
+    judge = None
+    if witness_dir is not None:  # the witnesses' expected verdicts: the audit's evidence
+        from fretc.monitors.interval import verdict_of
+        judge = verdict_of
+    with settings.progress or contextlib.nullcontext():
+        result = check_requirements(
+            compiled, budget=settings.budget, mus_budget=settings.mus_budget,
+            redundancy=settings.redundancy, witness_dir=witness_dir, inputs=ins,
+            outputs=outs, witness_judge=judge, engine=settings.engine,
+            deadline=settings.deadline, progress=settings.progress)
+    for e in result.input_errors:
+        click.echo(shown(str(e)), err=True)
+    result.notes += rs.notes  # (a FRET export's declarations: what is not used is said)
+    return result
+
+
+def _check_project(parts: list[tuple[str, Any]], settings: _Settings, witness_dir: str | None,
+                   as_json: bool, output: str | None) -> None:
+    """Check each FRET component of ``parts`` (name, its requirement set) with its own
+    Inputs and Outputs, print each report and FRET's table
+    (:mod:`fretc.check.fret_components`), write ``-o``, and exit with the largest exit code.
+    Witnesses go to ``witness_dir/COMPONENT``."""
+    import os
+
+    from fretc.check.fret_components import project_json, table_text
+
+    done = []
+    stems = file_stems([name for name, _part in parts])
+    for name, part in parts:
+        wdir = None if witness_dir is None else os.path.join(witness_dir, stems[name])
+        result = _checked(part, part.inputs, part.outputs, settings, wdir)
+        done.append((name, [e.id for e in part.entries], result))
+    doc = project_json(done)
+    if output:
+        from fretc.common.outputs import write_file
+
+        write_file(output, json.dumps(doc, indent=2) + "\n")
+    if as_json:
+        click.echo(json.dumps(doc, indent=2))
+    else:
+        for name, ids, result in done:
+            click.echo(shown(f"== component {name}: {', '.join(ids)}"))
+            click.echo(shown(render_text(result)))
+            click.echo("")
+        click.echo(shown(table_text(doc["fret_components"]) + f"; exit {doc['exit_code']}"))
+    sys.exit(doc["exit_code"])
 
 
 class _CheckProgress:
@@ -263,8 +324,7 @@ class _CheckProgress:
     def __exit__(self, *exc: object) -> None:
         self.bar.stop()
 
-    def __call__(self, stage: str, at: int, total: int, component: int,
-                 components: int) -> None:
-        where = f"component {component} of {components}: " if components > 1 else ""
+    def __call__(self, stage: str, at: int, total: int, group: int, groups: int) -> None:
+        where = f"group {group} of {groups}: " if groups > 1 else ""
         self.bar.update(self.task, description=where + self._WORDS.get(stage, stage),
                         completed=at - 1, total=total)

@@ -20,7 +20,8 @@ from typing import Any, TYPE_CHECKING
 
 from fretc.common.textsafe import visible
 
-from fretc.cli.options import TEXT_ATTRIBUTE_OPTION, text_attribute
+from fretc.cli.options import (TEXT_ATTRIBUTE_OPTION, TICK_PERIOD_OPTION, entries_with_period,
+                               period_option_value, text_attribute)
 from fretc.cli.options import shown as _shown
 
 if TYPE_CHECKING:
@@ -29,25 +30,28 @@ if TYPE_CHECKING:
 __all__ = ["compile_cmd"]
 
 
-def _entries(paths) -> list:
-    """The :class:`fretc.fretish.files.RequirementEntry` list of ``paths``, parsed (an unreadable
-    file: its error printed, exit code 2; a :class:`fretc.common.errors.FretishError` of a file
-    goes to the command group's handler: printed, exit code 2)."""
+def _entries(paths, tick_period: str | None = None) -> list:
+    """The :class:`fretc.fretish.files.RequirementEntry` list of ``paths``, parsed, each with
+    ``tick_period`` (``--tick-period``) as its period when given (an unreadable file: its
+    error printed, exit code 2; a :class:`fretc.common.errors.FretishError` of a file or a
+    bad ``--tick-period`` goes to the command group's handler: printed, exit code 2)."""
     from fretc.fretish.files import load_requirements  # lazy: the parser only when a command compiles
 
+    period_option_value(tick_period)  # (a bad value before any file is read)
     try:
-        return load_requirements(list(paths), text_attribute=text_attribute())
+        entries = load_requirements(list(paths), text_attribute=text_attribute())
     except OSError as exc:
         click.echo(_shown(f"error: {exc}"), err=True)
         sys.exit(2)
+    return entries_with_period(entries, tick_period)
 
 
-def _load(paths) -> list:
+def _load(paths, tick_period: str | None = None) -> list:
     """The compiled requirements of ``paths`` (:func:`_entries`, then the compiler)."""
     # lazy: the compiler (Lark tables, Spot) only when a command compiles
     from fretc.compiler.build import compile_entries
 
-    return compile_entries(_entries(paths))
+    return compile_entries(_entries(paths, tick_period))
 
 
 @click.command("compile")
@@ -64,19 +68,20 @@ def _load(paths) -> list:
               help="psl: TOML mapping of variables to AJPF beliefs, percepts and actions.")
 @click.option("--split", is_flag=True,
               help="c: one header and source per requirement instead of one per file.")
+@TICK_PERIOD_OPTION
 @TEXT_ATTRIBUTE_OPTION
 def compile_cmd(files: tuple[str, ...], emit: str, as_json: bool, output: str | None,
-                psl_map: str | None, split: bool) -> None:
+                psl_map: str | None, split: bool, tick_period: str | None) -> None:
     """Compile requirement FILES (.fret, FRET JSON exports, .reqif/.reqifz, Doorstop
     trees)."""
     if emit == "ltl":
         if as_json:
-            texts, failed = _ltl_json_texts(files)
+            texts, failed = _ltl_json_texts(files, tick_period)
             for c in failed:
                 click.echo(_shown(str(c.error)), err=True)
             _write_json_list(sys.stdout, texts)
             sys.exit(1 if failed else 0)
-    compiled = _load(files)
+    compiled = _load(files, tick_period)
     if not compiled:
         _no_requirements(files)
     failed = [c for c in compiled if c.error is not None]
@@ -131,7 +136,7 @@ def _no_requirements(files) -> None:
     sys.exit(2)
 
 
-def _ltl_json_texts(paths) -> tuple:
+def _ltl_json_texts(paths, tick_period: str | None = None) -> tuple:
     """``(texts, failed)`` of ``--emit ltl --json``: per requirement of ``paths``, in order,
     its text in the JSON list (:func:`ltl_json_item`), and the compiled requirements that
     failed (their errors are printed before the list). Each requirement is compiled and
@@ -139,10 +144,10 @@ def _ltl_json_texts(paths) -> tuple:
     forms are dropped as soon as its text is made (a failed one is kept for its error), so
     the run keeps the texts, not a thousand requirements' trees (a third of the peak
     memory of a thousand requirements). Errors, exit codes and texts are those of
-    :func:`_load` then :func:`ltl_json`."""
+    :func:`_load` then :func:`ltl_json`; ``tick_period`` as there."""
     from fretc.compiler.build import compile_entry
 
-    entries = _entries(paths)
+    entries = _entries(paths, tick_period)
     if not entries:
         _no_requirements(paths)
     item = ltl_json_item()

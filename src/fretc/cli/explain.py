@@ -15,7 +15,7 @@ from pathlib import Path
 
 import click
 
-from fretc.cli.options import TEXT_ATTRIBUTE_OPTION
+from fretc.cli.options import TEXT_ATTRIBUTE_OPTION, TICK_PERIOD_OPTION
 from fretc.cli.options import shown as _shown
 
 __all__ = ["explain_cmd"]
@@ -30,9 +30,10 @@ __all__ = ["explain_cmd"]
               help="Write FRET's semantics diagram of each requirement (its scope intervals, "
                    "trigger points and the timing's window, as FRET's Semantics panel draws "
                    "them) into this folder, one ID.svg each.")
+@TICK_PERIOD_OPTION
 @TEXT_ATTRIBUTE_OPTION
 def explain_cmd(file: str, ids: tuple[str, ...], output: str | None,
-                semantics: str | None = None) -> None:
+                tick_period: str | None, semantics: str | None = None) -> None:
     """Explain the requirements of FILE (or only IDS): plain English, template key and a
     diagram of the scope, the triggers and the response windows."""
     from fretc.compiler.build import compile_entries
@@ -41,9 +42,10 @@ def explain_cmd(file: str, ids: tuple[str, ...], output: str | None,
     from fretc.common.textsafe import file_stems
     from fretc.reports.explanation import svg, text
 
-    from fretc.cli.options import text_attribute
+    from fretc.cli.options import entries_with_period, text_attribute
 
-    compiled = compile_entries(load_requirements([file], text_attribute=text_attribute()))
+    compiled = compile_entries(entries_with_period(
+        load_requirements([file], text_attribute=text_attribute()), tick_period))
     known = [c.id for c in compiled]
     unknown = [i for i in ids if i not in known]
     if unknown:

@@ -445,21 +445,35 @@ class RequirementSet:
     def __init__(self, as_written: list[Any], entries: list[Any], notes: list[str],
                  bindings: Any, component: str | None = None,
                  every: list[Any] | None = None):
-        from fretc.common.errors import InputError
-
         self.as_written, self.entries, self.notes = as_written, entries, notes
         self.bindings = bindings
         self.component = component
         self._own = entries
         if component is not None:  # (its declarations: every requirement's, selected or not)
-            self._own = [e for e in (every if every is not None else entries)
-                         if e.requirement is not None
-                         and e.requirement.component == component]
-            if not self._own:
-                comps = sorted({e.requirement.component for e in entries
-                                if e.requirement is not None})
-                raise InputError(f"--component {component}: no requirement of that component "
-                                 f"in the files (their components: {', '.join(comps)})")
+            self._own = _of_component(every if every is not None else entries, component)
+
+    def by_component(self) -> list[tuple[str, RequirementSet]]:
+        """The set split as FRET checks a project (:mod:`fretc.check.fret_components`): per
+        component its selected requirements, its own Inputs and Outputs and the notes on
+        the variables they read, in the order the components first appear; empty when the
+        files declare no FRET variable, name fewer than two components, or have a
+        requirement that did not parse (the set is then checked whole, as before)."""
+        from fretc.fretish.fret_variables import fret_declarations
+
+        if any(e.requirement is None for e in self.entries) or not any(
+                getattr(e, "variables", ()) for e in self.as_written):
+            return []
+        names = list(dict.fromkeys(e.requirement.component for e in self.entries))
+        if len(names) < 2:
+            return []
+        written = {e.id: e for e in self.as_written}
+        out = []
+        for name in names:
+            own = [e for e in self.entries if e.requirement.component == name]
+            notes = fret_declarations([written[e.id] for e in own])[1]
+            out.append((name, RequirementSet(self.as_written, own, notes, self.bindings, name,
+                                             _of_component(self.as_written, name))))
+        return out
 
     @property
     def inputs(self) -> list[str] | None:
@@ -543,20 +557,24 @@ def _selected(entries: list[Any], only: str | None, exclude: str | None) -> list
 
 def requirement_set(files: Sequence[str], bindings_file: str | None, *,
                     component: str | None = None, only: str | None = None,
-                    exclude: str | None = None) -> RequirementSet:
+                    exclude: str | None = None,
+                    tick_period: str | None = None) -> RequirementSet:
     """Read requirement ``files`` (any format :func:`fretc.fretish.files.load_requirements`
-    reads) with the ``-b`` binding file: each requirement's tick period is its file's
+    reads) with the ``-b`` binding file: each requirement's tick period is ``tick_period``
+    (``--tick-period``, every requirement's, as in ``fretc audit``), else its file's
     ``@tick_period``, else the bindings' (``-b``, else the binding files beside the
     requirements, :func:`fretc.audit.discovery.discover_bindings`, read only when a
     requirement needs a period), never a duration in time units read as ticks
-    (:mod:`fretc.signals.bindings.periods`); ``component``, ``only``, ``exclude`` the
-    options of :func:`selection_options` (:class:`RequirementSet`).
+    (:mod:`fretc.signals.bindings.periods`); ``component`` (that component's requirements
+    only), ``only``, ``exclude`` the options of :func:`selection_options`
+    (:class:`RequirementSet`). Only the requirements selected need a period, and the notes
+    on a FRET export's declarations are those of the variables they read.
 
     Raises:
         FretcError: a file or binding file that cannot be read, no period known for a
-            duration in time units, an unknown id or component, a FRET variable both a
-            component's input and another's output without ``component`` (exit 2 through
-            the command group)."""
+            duration in time units, an unknown id or component, a bad ``tick_period``, a
+            FRET variable both a component's input and another's output without
+            ``component`` (exit 2 through the command group)."""
     from pathlib import Path
 
     from fretc.common.errors import InputError
@@ -564,25 +582,87 @@ def requirement_set(files: Sequence[str], bindings_file: str | None, *,
     from fretc.fretish.fret_variables import fret_declarations
     from fretc.signals.bindings.periods import time_unit_duration, with_periods
 
+    override = period_option_value(tick_period)
     try:
         as_written = load_requirements([Path(p) for p in files], text_attribute=text_attribute())
     except OSError as exc:
         raise InputError(f"cannot read the requirements: {exc}") from None
-    entries, notes = fret_declarations(as_written)  # (a FRET export's literal constants)
+    every = as_written
+    chosen = as_written
+    if component is not None:  # (that component's requirements only, as FRET checks one)
+        every = chosen = _of_component(as_written, component)
+    if only is not None or exclude is not None:
+        chosen = _selected(chosen, only, exclude)
+    entries, notes = fret_declarations(chosen)  # (a FRET export's literal constants)
     bindings, found = None, ""
     if bindings_file is not None:
         from fretc.signals.bindings.files import load_bindings
 
         bindings, found = load_bindings(bindings_file), "-b"
-    elif any(e.tick_period is None and time_unit_duration(e) for e in entries):
+    elif override is None and any(e.tick_period is None and time_unit_duration(e)
+                                  for e in entries):
         bindings, found = _beside(files)
-    entries = with_periods(entries, bindings, found)
+    entries = with_periods(entries, bindings, found, override)
     if bindings_file is None:
         bindings = None  # (found beside: its period only)
-    every = entries
-    if only is not None or exclude is not None:
-        entries = _selected(entries, only, exclude)
     return RequirementSet(as_written, entries, notes, bindings, component, every)
+
+
+def period_option_value(tick_period: str | None) -> Any:
+    """``--tick-period`` (``"100 ms"``, ``"10 Hz"``; :func:`fretc.common.units.parse_duration`)
+    as a :class:`fractions.Fraction` of seconds, None when not given.
+
+    Raises:
+        InputError: a value that is not a positive duration, naming the option."""
+    if tick_period is None:
+        return None
+    from fractions import Fraction
+
+    from fretc.common.errors import InputError
+    from fretc.common.units import parse_duration
+
+    try:
+        return Fraction(parse_duration(tick_period), 1_000_000_000)
+    except ValueError as exc:
+        raise InputError(f"--tick-period: {exc}") from None
+
+
+def entries_with_period(entries: list[Any], tick_period: str | None) -> list[Any]:
+    """``entries`` (:class:`fretc.fretish.entry.RequirementEntry`) each with ``--tick-period``
+    (:func:`period_option_value`) as its tick period; ``entries`` when it is not given.
+
+    Raises:
+        InputError: a ``tick_period`` that is not a positive duration."""
+    import dataclasses
+
+    period = period_option_value(tick_period)
+    if period is None:
+        return entries
+    return [dataclasses.replace(e, tick_period=period) for e in entries]
+
+
+#: ``--tick-period`` of the commands that read requirements outside an audit (check, shield,
+#: testgen, compile, explain): a FRET export cannot declare ``@tick_period``
+TICK_PERIOD_OPTION = click.option(
+    "--tick-period", default=None, metavar="DURATION",
+    help="The tick period durations in time units convert with, e.g. \"100 ms\" (overrides "
+         "the files' @tick_period and the bindings'; the way to give a FRET export one).")
+
+
+def _of_component(entries: list[Any], component: str) -> list[Any]:
+    """The entries whose requirement is of ``component`` (FRET judges a component's
+    requirements with that component's variables: its realizability table has a row per
+    component). Raises :class:`fretc.common.errors.InputError` when none is, naming the
+    components there are."""
+    from fretc.common.errors import InputError
+
+    own = [e for e in entries if e.requirement is not None
+           and e.requirement.component == component]
+    if not own:
+        comps = sorted({e.requirement.component for e in entries if e.requirement is not None})
+        raise InputError(f"--component {component}: no requirement of that component in the "
+                         f"files (their components: {', '.join(comps)})")
+    return own
 
 
 def exit_on_compile_errors(files: Sequence[str], compiled: Sequence[Any],

@@ -23,7 +23,8 @@ from typing import Any
 
 import click
 
-from fretc.cli.options import (TEXT_ATTRIBUTE_OPTION, budget_options, io_options, names_of,
+from fretc.cli.options import (TEXT_ATTRIBUTE_OPTION, TICK_PERIOD_OPTION, budget_options,
+                               io_options, names_of,
                                exit_on_compile_errors, requirement_set, selection_options,
                                set_bindings_option, shown)
 
@@ -71,13 +72,15 @@ FORMS = ("python", "c", "ros2", "gwendolen")
               "bus, a recorder or monitor ticking at another phase sees the shield's answers "
               "up to a tick late (the ROS 2 node: --margin 1).")
 @budget_options("game")
+@TICK_PERIOD_OPTION
 @TEXT_ATTRIBUTE_OPTION
 def shield_cmd(files: tuple[str, ...], inputs: str | None, outputs: str | None,
                bindings_file: str | None, component: str | None, only: str | None,
                exclude: str | None, prefer: str | None, assume: tuple[str, ...],
                fallback: str | None, forms: tuple[str, ...],
                out_dir: str | None, prove: bool, explain: bool, name: str | None,
-               margin: int, budget: int, memory_budget: int, query_cpu: float) -> None:
+               margin: int, budget: int, memory_budget: int, query_cpu: float,
+               tick_period: str | None) -> None:
     """Synthesize the shield of requirement FILES: each tick it passes the controller's
     proposed outputs unchanged when they keep every requirement winnable, and otherwise
     changes the fewest outputs needed (the Safety System of Safe-ROS, generated)."""
@@ -88,7 +91,16 @@ def shield_cmd(files: tuple[str, ...], inputs: str | None, outputs: str | None,
 
     if forms and out_dir is None:
         raise click.UsageError("--emit needs -o DIR")
-    rs, compiled, assumed = _read(files, assume, bindings_file, (component, only, exclude))
+    rs, compiled, assumed = _read(files, assume, bindings_file, (component, only, exclude),
+                                  tick_period)
+    parts = rs.by_component() if component is None and inputs is None and outputs is None \
+        else []
+    if parts:  # (FRET: a component's requirements with its interface; a shield is one's)
+        click.echo(shown("error: the requirements are of several FRET components ("
+                         + ", ".join(name for name, _p in parts) + "), each with its own "
+                         "Inputs and Outputs: give --component NAME (a shield is one "
+                         "component's), or --inputs and --outputs"), err=True)
+        sys.exit(2)
     as_written = rs.as_written
     ins = names_of(inputs)
     outs = names_of(outputs)
@@ -141,18 +153,22 @@ def shield_cmd(files: tuple[str, ...], inputs: str | None, outputs: str | None,
 
 
 def _read(files: Sequence[str], assume: Sequence[str], bindings_file: str | None,
-          selection: tuple[str | None, str | None, str | None] = (None, None, None)
-          ) -> tuple[Any, list[Any], list[Any]]:
-    """The requirement set (``selection``: ``--component``, ``--only``, ``--exclude``), its
-    requirements and the assumptions (``--assume``) compiled;
+          selection: tuple[str | None, str | None, str | None] = (None, None, None),
+          tick_period: str | None = None) -> tuple[Any, list[Any], list[Any]]:
+    """The requirement set (``selection``: ``--component``, ``--only``, ``--exclude``;
+    ``tick_period``: ``--tick-period``), its requirements and the assumptions (``--assume``)
+    compiled;
     exits 2 naming what cannot be compiled, an id both a requirement's and an assumption's,
     or no requirement."""
     from fretc.compiler.build import compile_entries
 
     component, only, exclude = selection
-    rs = requirement_set(files, bindings_file, component=component, only=only, exclude=exclude)
+    rs = requirement_set(files, bindings_file, component=component, only=only, exclude=exclude,
+                         tick_period=tick_period)
     compiled = compile_entries(rs.entries)
-    assumed = compile_entries(requirement_set(assume, bindings_file).entries) if assume else []
+    assumed = (compile_entries(requirement_set(assume, bindings_file,
+                                               tick_period=tick_period).entries)
+               if assume else [])
     taken = {c.id for c in compiled}
     twice = sorted({c.id for c in assumed if c.id in taken})
     if twice:

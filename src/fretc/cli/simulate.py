@@ -15,7 +15,7 @@ import sys
 
 import click
 
-from fretc.cli.options import TEXT_ATTRIBUTE_OPTION
+from fretc.cli.options import TEXT_ATTRIBUTE_OPTION, TICK_PERIOD_OPTION
 from fretc.cli.options import shown as _shown
 
 __all__ = ["simulate_cmd"]
@@ -30,9 +30,10 @@ __all__ = ["simulate_cmd"]
               help="Write one SVG per requirement and simulation.html into this folder.")
 @click.option("--json", "json_path", type=click.Path(dir_okay=False), default=None,
               help='Write {"ticks", "requirements": [{"id", "ft", "pt", "parts"}]} here.')
+@TICK_PERIOD_OPTION
 @TEXT_ATTRIBUTE_OPTION
 def simulate_cmd(file: str, trace: str, ids: tuple[str, ...], output: str | None,
-                 json_path: str | None) -> None:
+                 json_path: str | None, tick_period: str | None) -> None:
     """Simulate the requirements of FILE on TRACE (a .csv as the audit's, or a timeline
     text: one line per variable, 'p: 0-3, 7' for the ticks a boolean holds, 'speed: 0.0 0.2
     0.6' for one value per tick, '@ticks N' for the length)."""
@@ -41,9 +42,10 @@ def simulate_cmd(file: str, trace: str, ids: tuple[str, ...], output: str | None
     from fretc.monitors.simulate import read_trace, simulate
     from fretc.reports.simulation import text_table, write_outputs
 
-    from fretc.cli.options import text_attribute
+    from fretc.cli.options import entries_with_period, text_attribute
 
-    compiled = compile_entries(load_requirements([file], text_attribute=text_attribute()))
+    compiled = compile_entries(entries_with_period(
+        load_requirements([file], text_attribute=text_attribute()), tick_period))
     known = {c.id for c in compiled}
     unknown = [i for i in ids if i not in known]
     if unknown:

@@ -39,7 +39,8 @@ from pathlib import Path
 
 import click
 
-from fretc.cli.options import (TEXT_ATTRIBUTE_OPTION, exit_on_compile_errors, requirement_set,
+from fretc.cli.options import (TEXT_ATTRIBUTE_OPTION, TICK_PERIOD_OPTION,
+                               exit_on_compile_errors, requirement_set, selection_options,
                                set_bindings_option, shown)
 
 __all__ = ["testgen_cmd"]
@@ -58,15 +59,19 @@ __all__ = ["testgen_cmd"]
 @set_bindings_option("A binding file (*.bindings.toml): also write DIR/T01.mcap... , each "
                      "test's messages on the bound topics, read back by fretc audit with the "
                      "same file.")
+@TICK_PERIOD_OPTION
+@selection_options
 @TEXT_ATTRIBUTE_OPTION
-def testgen_cmd(files: tuple[str, ...], out_dir: str, with_pytest: bool, bindings_file: str | None
-               ) -> None:
+def testgen_cmd(files: tuple[str, ...], out_dir: str, with_pytest: bool, bindings_file: str | None,
+                tick_period: str | None, component: str | None, only: str | None,
+                exclude: str | None) -> None:
     """Generate requirements-based tests of FILES into DIR: one CSV trace per test and
     tests.json (what each covers, the expected verdict of every requirement)."""
     from fretc.testing.generate import generate, write_tests
     from fretc.compiler.build import compile_entries
 
-    rs = requirement_set(files, bindings_file)
+    rs = requirement_set(files, bindings_file, component=component, only=only, exclude=exclude,
+                         tick_period=tick_period)
     entries = rs.entries
     compiled = compile_entries(entries)
     exit_on_compile_errors(files, compiled)

@@ -1,0 +1,102 @@
+"""FRET's realizability table: a FRET project checked component by component.
+
+FRET declares a project's variables per component (its glossary: a variable is an Input,
+Output, Internal or Mode of one component) and checks realizability per component: the
+requirements whose text names the component (``Autopilot shall ...``) with that component's
+Inputs as the environment's and its Outputs as the controller's (FRET's Analysis Portal,
+"Realizability Checking"; Katis et al., "Realizability Checking of Requirements in FRET",
+NASA/TM-20220007610). An Output of one component read as an Input of another is, for the
+second, an input like any other: each component is judged alone, so a project with such a
+variable is no conflict (fretc refused it before there was a per-component run).
+
+``fretc check`` on requirement files whose requirements name several components and whose
+FRET export declares variables runs one check per component (:func:`component_row` reads
+each result) and ends with the table (:func:`table_text`): per component its requirements
+and ``realizable``, ``UNREALIZABLE`` with its conflicts (FRET's minimal unrealizable
+subsets), ``unknown`` with the reason, or ``not checked`` with the reason. Inside a
+component fretc splits the requirements further into **groups** (requirements that share
+variables, decided one by one): fretc's word for those, never "component".
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from fretc.check.findings import CheckResult
+
+__all__ = ["component_row", "table_text", "project_json"]
+
+
+def component_row(name: str, ids: list[str], result: CheckResult) -> dict[str, Any]:
+    """The table row of component ``name`` (its requirement ``ids`` in order) from its
+    check ``result``: ``{"component", "requirements", "realizability", "conflicts",
+    "reason", "exit_code"}``. ``realizability`` is ``"realizable"`` (every group decided
+    realizable), ``"unrealizable"`` (a group is; ``conflicts`` the minimal unrealizable
+    subsets found, else the group's ids), ``"unknown"`` (a group past its budget; ``reason``
+    the finding's words) or ``"not checked"`` (the component declares no Input or Output, or
+    a variable of a group is declared neither: ``reason`` says which)."""
+    row: dict[str, Any] = {"component": name, "requirements": ids, "conflicts": [],
+                           "reason": "", "exit_code": result.exit_code}
+    rz = result.realizability
+    if rz is None:
+        row.update(realizability="not checked",
+                   reason="the component declares no Input or Output variable")
+        return row
+    unreal = [f for f in result.findings if f.kind == "unrealizable"]
+    unknown = [f for f in result.findings if f.kind == "unknown"
+               and f.message.startswith("realizability")]
+    undeclared = [f for f in result.findings if f.kind == "undeclared"]
+    if unreal:
+        row["realizability"] = "unrealizable"
+        row["conflicts"] = [s for f in unreal for s in (f.subsets or [f.requirements])]
+    elif unknown:
+        row.update(realizability="unknown", reason="; ".join(f.message for f in unknown))
+    elif undeclared:
+        names = sorted({n for f in undeclared for n in f.details.get("undeclared", {})})
+        row.update(realizability="not checked",
+                   reason=", ".join(names) + " declared neither Input nor Output")
+    elif rz.get("groups") and all(g.get("realizable") is True for g in rz["groups"]):
+        row["realizability"] = "realizable"
+    else:
+        row.update(realizability="unknown", reason="no group was decided")
+    return row
+
+
+def table_text(rows: list[dict[str, Any]]) -> str:
+    """FRET's realizability table of :func:`component_row` rows, one line per component
+    (the conflicts and reasons indented under it) and a last line with the counts."""
+    width = max((len(r["component"]) for r in rows), default=0)
+    lines = ["FRET components (realizability of each component's requirements with its "
+             "Inputs and Outputs):"]
+    for r in rows:
+        n = len(r["requirements"])
+        word = {"realizable": "realizable", "unrealizable": "UNREALIZABLE"}.get(
+            r["realizability"], r["realizability"])
+        lines.append(f"  {r['component']:<{width}}  {n:3d} requirement{'s' * (n != 1)}  "
+                     f"{word}  (exit {r['exit_code']})")
+        for c in r["conflicts"]:
+            lines.append("      conflict {" + ", ".join(c) + "}")
+        if r["reason"]:
+            lines.append(f"      {r['reason']}")
+    counts: dict[str, int] = {}
+    for r in rows:
+        counts[r["realizability"]] = counts.get(r["realizability"], 0) + 1
+    lines.append(f"{len(rows)} components: " + ", ".join(
+        f"{counts[k]} {k}" for k in ("realizable", "unrealizable", "unknown", "not checked")
+        if k in counts))
+    return "\n".join(lines)
+
+
+def project_json(parts: list[tuple[str, list[str], CheckResult]]) -> dict[str, Any]:
+    """The document of ``fretc check --json`` / ``-o`` on a project checked per component:
+    ``{"tool", "exit_code", "fret_components": [{"component", "requirements",
+    "realizability", "conflicts", "reason", "exit_code", "check"}]}``, ``check`` the
+    component's own check document (:meth:`CheckResult.to_json`); ``exit_code`` the
+    largest."""
+    comps = []
+    for name, ids, result in parts:
+        row = component_row(name, ids, result)
+        row["check"] = result.to_json()
+        comps.append(row)
+    return {"tool": "fretc check", "exit_code": max((r["exit_code"] for r in comps), default=0),
+            "fret_components": comps}
