@@ -310,6 +310,13 @@ def _legend(req: A.Requirement, lay: SemanticsLayout) -> list[str]:
                      "(the negated obligation, checked there)")
     if req.timing.kind == "after" and lay.negated:
         lines.append("only* with after: violated when both windows are met")
+    if req.timing.kind in A.STOP_TIMINGS:
+        lines.append(f"{req.timing.kind}: the window ends the tick before "
+                     f"{_source(req, req.timing.stop)} first holds")
+    drawn = {wd.trigger for wd in lay.windows}
+    if len(lay.triggers) > len(drawn):
+        lines.append("windows drawn from the first trigger of each interval; every trigger "
+                     "owes its own")
     if not lay.windows:
         lines.append("no window: the trigger has none in its interval")
     return lines
