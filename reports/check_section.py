@@ -55,8 +55,15 @@ def check_context(doc: dict) -> dict:
         order), "components": [{"requirements", "realizable", "method"}] (the realizability of
         each group checked together: ``realizability.groups``, ``components`` in older
         documents), "notes",
-        "input_errors", "exit_code", "semantics"}``; a finding as :func:`_finding` gives it.
+        "input_errors", "exit_code", "semantics", "fret_components"}``; a finding as
+        :func:`_finding` gives it. ``fret_components`` is FRET's table of a project checked
+        one component at a time (:mod:`fretc.check.fret_components`: ``[{"component",
+        "requirements", "realizability", "conflicts", "reason"}]``), empty otherwise; the
+        rows, findings and groups are then every component's, in order (findings numbered
+        through the whole project, each group named with its component).
     """
+    if "fret_components" in doc:
+        return _project_context(doc)
     findings = [_finding(k, f) for k, f in enumerate(doc.get("findings") or [])]
     rows = []
     for r in doc.get("requirements") or []:
@@ -78,4 +85,32 @@ def check_context(doc: dict) -> dict:
             "notes": [str(n) for n in doc.get("notes") or []],
             "input_errors": [str(n) if not isinstance(n, dict) else str(n.get("message", n))
                              for n in doc.get("input_errors") or []],
-            "exit_code": doc.get("exit_code"), "semantics": str(doc.get("semantics") or "")}
+            "exit_code": doc.get("exit_code"), "semantics": str(doc.get("semantics") or ""),
+            "fret_components": []}
+
+
+def _project_context(doc: dict) -> dict:
+    """:func:`check_context` of a project document (``fret_components``, each with its own
+    ``check`` document): the components' contexts joined, findings renumbered."""
+    out: dict[str, Any] = {"rows": [], "findings": [], "components": [], "notes": [],
+                           "input_errors": [], "exit_code": doc.get("exit_code"),
+                           "semantics": "", "fret_components": []}
+    for comp in doc.get("fret_components") or []:
+        name = str(comp.get("component", ""))
+        part = check_context(comp.get("check") or {})
+        for f in part["findings"]:  # (the same dicts the rows list: renumbered once)
+            f["index"] = len(out["findings"])
+            f["anchor"] = f"check-finding-{f['index']}"
+            out["findings"].append(f)
+        out["rows"] += part["rows"]
+        out["components"] += [dict(g, requirements=[f"{name}:"] + g["requirements"])
+                              for g in part["components"]]
+        out["notes"] += [f"{name}: {n}" for n in part["notes"]]
+        out["input_errors"] += [f"{name}: {n}" for n in part["input_errors"]]
+        out["semantics"] = out["semantics"] or part["semantics"]
+        out["fret_components"].append({
+            "component": name, "requirements": [str(x) for x in comp.get("requirements") or []],
+            "realizability": str(comp.get("realizability", "")),
+            "conflicts": [", ".join(map(str, c)) for c in comp.get("conflicts") or []],
+            "reason": str(comp.get("reason") or "")})
+    return out
