@@ -80,13 +80,13 @@ def test_r1_main_line_within_the_limits():
 PACKAGE_ORDER = ("fretc.common", "fretc.fretish", "fretc.compiler", "fretc.logs",
                  "fretc.signals.bindings", "fretc.signals", "fretc.monitors", "fretc.check",
                  "fretc.audit", "fretc.testing", "fretc.shield", "fretc.live", "fretc.sim",
-                 "fretc.reports", "fretc.editor", "fretc.cli", "fretc")
+                 "fretc.reports", "fretc.editor", "fretc.qualification", "fretc.cli", "fretc")
 #: the repository's source folders: each installs as ``fretc.<folder>`` (src/fretc/ links each
 #: of them); ``src/fretc/`` itself is ``fretc``, holding ``fretc.cli``
 LIBRARY = ("common", "fretish", "compiler", "logs", "signals", "monitors", "check", "audit",
-           "testing", "shield", "live", "sim", "reports", "editor", "src/fretc")
+           "testing", "shield", "live", "sim", "reports", "editor", "qualification", "src/fretc")
 #: the packages whose modules may import ``fretc.reports``: the reports and the front ends
-FRONT_ENDS = ("fretc.reports", "fretc.editor", "fretc.cli", "fretc")
+FRONT_ENDS = ("fretc.reports", "fretc.editor", "fretc.qualification", "fretc.cli", "fretc")
 
 
 def source_files(folder: Path) -> list[Path]:

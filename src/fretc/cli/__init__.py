@@ -139,6 +139,7 @@ _OPTIONAL = {"audit": ("audit", "audit_cmd"), "check": ("check", "check_cmd"),
              "shield": ("shield", "shield_cmd"),
              "shield-replay": ("shield_replay", "shield_replay_cmd"),
              "ajpf": ("ajpf", "ajpf_cmd"),
+             "qualify": ("qualify", "qualify_cmd"),
              "ltlsim": ("ltlsim", "ltlsim_cmd"),
              "replay": ("watch", "replay_cmd")}
 

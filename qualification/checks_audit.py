@@ -1,0 +1,259 @@
+"""The validation suite's end-to-end checks: ``fretc audit`` run as a user runs it (the
+installed command, through click in this process), on CSV traces and MCAP logs written in the
+run's work folder, its exit codes, verdicts and audit JSON compared with what FRET's
+definitions and the documentation say (:mod:`fretc.qualification.reference` for the
+verdicts; docs/guide/audits.md for exit codes, unknown ticks and damage;
+docs/guide/ticks.md for the tick rules).
+"""
+
+from __future__ import annotations
+
+import json
+import random
+from pathlib import Path
+from typing import Any
+
+from fretc.qualification import reference as ref
+from fretc.qualification.checks import SEED, Check, Run
+
+#: CSV traces of the end-to-end differential check
+E2E_TRACES = 10
+S = 1_000_000_000
+
+
+def fretc(run: Run, args: list[str]) -> tuple[int, str]:
+    """Run the ``fretc`` command (``run.command``: the click group the console script runs)
+    with ``args`` in this process through click's test runner; returns (exit code, its
+    output). Raises ``ValueError`` when the run has no command."""
+    from click.testing import CliRunner
+
+    if run.command is None:
+        raise ValueError("the end-to-end checks need the fretc command (Run.command)")
+    result = CliRunner().invoke(run.command, args, catch_exceptions=True)
+    text = result.output
+    if result.exception is not None and not isinstance(result.exception, SystemExit):
+        text += f"\n{type(result.exception).__name__}: {result.exception}"
+    return result.exit_code, text
+
+
+def audit(run: Run, name: str, requirements: str, logs: dict[str, str],
+          extra: tuple[str, ...] = ()) -> tuple[int, dict[str, Any] | None, str]:
+    """Write ``requirements`` (a .fret text) and the CSV ``logs`` (name -> text) into a
+    folder ``name`` of the work folder and audit them with ``--json``: (exit code, the audit
+    JSON or None when none was written, the command's output)."""
+    folder = run.work / name
+    folder.mkdir(parents=True, exist_ok=True)
+    req = folder / "requirements.fret"
+    req.write_text(requirements, encoding="utf-8")
+    paths = []
+    for log, text in sorted(logs.items()):
+        (folder / log).write_text(text, encoding="utf-8")
+        paths.append(str(folder / log))
+    out = folder / "audit.json"
+    code, text = fretc(run, ["audit", "-r", str(req), *paths, "--json", str(out), "--no-progress",
+                        *extra])
+    doc = json.loads(out.read_text("utf-8")) if out.exists() else None
+    return code, doc, text
+
+
+def verdicts(doc: dict[str, Any] | None) -> dict[tuple[str, str], dict[str, Any]]:
+    """The audit JSON's verdicts by (log file name, requirement id)."""
+    if doc is None:
+        return {}
+    return {(Path(log["log"]).name, v["requirement"]): v
+            for log in doc["logs"] for v in log["verdicts"]}
+
+
+def _csv(columns: dict[str, list[Any]]) -> str:
+    """A CSV trace: a header of the column names, one row a tick."""
+    names = sorted(columns)
+    rows = zip(*(columns[n] for n in names))
+    cell = {True: "true", False: "false"}
+    return "\n".join([",".join(names)] + [",".join(cell.get(v, str(v)) if isinstance(v, bool)
+                                                     else str(v) for v in row)
+                                            for row in rows]) + "\n"
+
+
+def check_audit_keys(run: Run) -> list[str]:
+    """The 288 key sentences audited on random CSV traces (one ``fretc audit``): each
+    verdict is the reference's, the exit code 1 exactly when one is violated (else 0), and
+    the audit JSON is valid under its schema."""
+    from fretc.reports.files import schema_problem
+
+    rnd = random.Random(SEED + 1)
+    keys = ref.key_sentences()
+    text = "".join(f"K{i:03d}: {sentence}\n" for i, (_, sentence) in enumerate(keys))
+    trace_list = [ref.random_trace(rnd, rnd.randint(1, ref.DURATION + 7))
+                  for _ in range(E2E_TRACES)]
+    logs = {f"t{j:02d}.csv": _csv({v: [t[v] for t in tr] for v in ref.VARIABLES})
+            for j, tr in enumerate(trace_list)}
+    code, doc, output = audit(run, "keys", text, logs)
+    got = verdicts(doc)
+    out, violated = [], False
+    for j, tr in enumerate(trace_list):
+        for i, (key, _) in enumerate(keys):
+            want = ref.verdict(key, tr)
+            violated |= want == "violated"
+            have = got.get((f"t{j:02d}.csv", f"K{i:03d}"), {}).get("verdict")
+            if have != want:
+                out.append(f"{key} on t{j:02d}.csv: {have}, expected {want}")
+    if code != (1 if violated else 0):
+        out.append(f"exit code {code}, expected {1 if violated else 0}: {output[-300:]}")
+    if doc is not None and (problem := schema_problem(doc)) is not None:
+        out.append(f"the audit JSON breaks its schema: {problem}")
+    return out[:5] + ([f"... and {len(out) - 5} more"] if len(out) > 5 else [])
+
+
+def check_verdicts_and_exit(run: Run) -> list[str]:
+    """Satisfied, violated (with its first violation and its robustness), error and a
+    syntax error, each with the documented exit code (0, 1, 2, 2)."""
+    always = "R1: the sw shall always satisfy x <= 5\n"
+    out = []
+    code, doc, _ = audit(run, "ok", always, {"ok.csv": _csv({"x": [1, 3, 2]})})
+    v = verdicts(doc).get(("ok.csv", "R1"), {})
+    if (code, v.get("verdict"), (v.get("robustness") or {}).get("value")) != (0, "satisfied", 2.0):
+        out.append(f"satisfied: exit {code}, {v.get('verdict')}, robustness "
+                   f"{(v.get('robustness') or {}).get('value')}; expected 0, satisfied, 2.0")
+    code, doc, _ = audit(run, "bad", always, {"bad.csv": _csv({"x": [1, 3, 7, 2]})})
+    v = verdicts(doc).get(("bad.csv", "R1"), {})
+    first = (v.get("first_violation") or {}).get("tick")
+    margin = (v.get("robustness") or {}).get("value")
+    if (code, v.get("verdict"), first, margin) != (1, "violated", 2, -2.0):
+        out.append(f"violated: exit {code}, {v.get('verdict')}, first violation at tick "
+                   f"{first}, robustness {margin}; expected 1, violated, 2, -2.0")
+    code, doc, _ = audit(run, "error", "R1: the sw shall always satisfy y <= 5\n",
+                         {"e.csv": _csv({"x": [1]})})
+    v = verdicts(doc).get(("e.csv", "R1"), {})
+    if code != 2 or v.get("verdict") != "error" or "y" not in (v.get("error") or ""):
+        out.append(f"a variable the log lacks: exit {code}, {v.get('verdict')} "
+                   f"({v.get('error')}); expected 2, error naming y")
+    code, doc, text = audit(run, "syntax", "R1: the sw shal satisfy r\n",
+                            {"s.csv": _csv({"r": [True]})})
+    if code != 2 or "requirements.fret:1:" not in text:
+        out.append(f"a syntax error: exit {code}, {text.strip()[-200:]!r}; expected 2 and "
+                   "requirements.fret:1:col")
+    return out
+
+
+def check_unknown(run: Run) -> list[str]:
+    """Three-valued verdicts: an ``unknown`` cell or a NaN compared that could change the
+    verdict gives ``unknown`` with its reason (exit 3); a violation in the ticks read stands
+    (exit 1); a run cut while an obligation is open is ``unknown`` (exit 3), the log
+    partial."""
+    always = "R1: the sw shall always satisfy x <= 5\n"
+    cases = (("unknown-cell", always, {"x": [1, "unknown", 2]}, 3, "unknown"),
+             ("unknown-nan", always, {"x": [1, "nan", 2]}, 3, "unknown"),
+             ("unknown-read", always, {"x": [7, "unknown", 2]}, 1, "violated"),
+             ("cut", "R1: upon c the sw shall eventually satisfy r\n",
+              {"c": [True, False, "cut"], "r": [False, False, "cut"]}, 3, "unknown"))
+    out = []
+    for name, text, columns, want_code, want in cases:
+        code, doc, _ = audit(run, name, text, {f"{name}.csv": _csv(columns)})
+        v = verdicts(doc).get((f"{name}.csv", "R1"), {})
+        if (code, v.get("verdict")) != (want_code, want):
+            out.append(f"{name}: exit {code}, {v.get('verdict')}; expected {want_code}, {want}")
+        elif want == "unknown" and not v.get("unknown_reason"):
+            out.append(f"{name}: unknown without a reason")
+        if name == "cut" and doc is not None and not doc["logs"][0]["partial"]:
+            out.append("cut: the log is not partial")
+        if name == "unknown-nan" and doc is not None and not any(
+                p["kind"] == "nan" for p in doc["logs"][0]["problems"]):
+            out.append("unknown-nan: no nan problem listed")
+    return out
+
+
+def _write_mcap(path: Path, messages: list[tuple[int, float]], chunk_size: int) -> None:
+    """An MCAP file of ``std_msgs/msg/Float64`` messages on ``/x`` (ROS 2 CDR, written by
+    the ``mcap`` and ``rosbags`` libraries, not by fretc): (log time in ns, value) each."""
+    from mcap.writer import Writer
+    from rosbags.typesys import Stores, get_typestore
+
+    store = get_typestore(Stores.ROS2_HUMBLE)
+    typ = "std_msgs/msg/Float64"
+    with open(path, "wb") as f:
+        w = Writer(f, chunk_size=chunk_size)
+        w.start(profile="ros2", library="fretc-qualify")
+        schema = w.register_schema(typ, "ros2msg",
+                                   store.generate_msgdef(typ, ros_version=2)[0].encode())
+        channel = w.register_channel("/x", "cdr", schema)
+        msg_type = store.types[typ]
+        for i, (time_ns, value) in enumerate(messages):
+            data = bytes(store.serialize_cdr(msg_type(data=value), typ))
+            w.add_message(channel, log_time=time_ns, data=data, publish_time=time_ns, sequence=i)
+        w.finish()
+
+
+def _mcap_audit(run: Run, name: str, messages: list[tuple[int, float]], chunk_size: int,
+                cut: float | None = None) -> tuple[int, dict[str, Any] | None, str]:
+    """Audit ``T1: the sw shall always satisfy x < 5`` (``x = /x.data``, a tick every 100
+    ms) on an MCAP log of ``messages``; ``cut``: keep only that fraction of the file."""
+    folder = run.work / name
+    folder.mkdir(parents=True, exist_ok=True)
+    log = folder / f"{name}.mcap"
+    _write_mcap(log, messages, chunk_size)
+    if cut is not None:
+        data = log.read_bytes()
+        log.write_bytes(data[:int(len(data) * cut)])
+    (folder / "requirements.fret").write_text("T1: the sw shall always satisfy x < 5\n",
+                                              encoding="utf-8")
+    (folder / "x.toml").write_text('[tick]\nperiod = "100 ms"\n\n[variables]\nx = "/x.data"\n',
+                                   encoding="utf-8")
+    out = folder / "audit.json"
+    code, text = fretc(run, ["audit", "-r", str(folder / "requirements.fret"), "--bindings",
+                        str(folder / "x.toml"), str(log), "--json", str(out), "--no-progress"])
+    return code, (json.loads(out.read_text("utf-8")) if out.exists() else None), text
+
+
+def check_mcap_ticks(run: Run) -> list[str]:
+    """The tick rules on an MCAP log at a 100 ms period: the grid from the first multiple
+    of the period at or after the first message to the first at or after the last; a
+    message exactly at a tick is held by that tick (sample and hold)."""
+    msgs = [(1_050_000_000, 1.0), (1_200_000_000, 9.0), (1_250_000_000, 1.0),
+            (1_350_000_000, 1.0)]
+    code, doc, text = _mcap_audit(run, "ticks", msgs, 1 << 20)
+    v = verdicts(doc).get(("ticks.mcap", "T1"), {})
+    fv = v.get("first_violation") or {}
+    got = (code, v.get("verdict"), fv.get("tick"), fv.get("tick_time_ns"),
+           v.get("first_tick_ns"), v.get("last_tick_ns"))
+    want = (1, "violated", 1, 1_200_000_000, 1_100_000_000, 1_400_000_000)
+    if got != want:
+        return [f"(exit, verdict, violation tick, its time, first tick, last tick) = {got}, "
+                f"expected {want}: {text.strip()[-200:]}"]
+    return []
+
+
+def check_mcap_damage(run: Run) -> list[str]:
+    """An MCAP log cut short (a crashed recording) is read up to the damage: the log is
+    partial, the damage listed, the exit code 3 (no violation in what was read) and no
+    verdict claims a satisfaction the lost part could break."""
+    msgs = [(S + i * 50_000_000, 1.0) for i in range(400)]
+    code, doc, text = _mcap_audit(run, "damage", msgs, 2048, cut=0.6)
+    if doc is None:
+        return [f"no audit JSON (exit {code}): {text.strip()[-200:]}"]
+    log = doc["logs"][0]
+    v = verdicts(doc).get(("damage.mcap", "T1"), {})
+    out = []
+    if code != 3 or not log["partial"] or not log["problems"]:
+        out.append(f"exit {code}, partial {log['partial']}, problems {len(log['problems'])}; "
+                   "expected 3, partial, the damage listed")
+    if v.get("verdict") == "satisfied" and not v.get("partial"):
+        out.append("the damaged log's verdict is satisfied without being marked partial")
+    return out
+
+
+#: the end-to-end checks, in the order they run
+CHECKS: tuple[Check, ...] = (
+    Check("audit-keys", ("TOR-VER-001", "TOR-VER-002", "TOR-VER-003", "TOR-VER-008",
+                         "TOR-TCK-007"),
+          "fretc audit of the 288 key sentences on CSV traces against the reference",
+          check_audit_keys),
+    Check("audit-verdicts", ("TOR-VER-003", "TOR-VER-005", "TOR-VER-006", "TOR-VER-007",
+                             "TOR-GRM-002"),
+          "verdicts, evidence, robustness and exit codes 0, 1, 2", check_verdicts_and_exit),
+    Check("audit-unknown", ("TOR-VER-004", "TOR-DMG-003", "TOR-DMG-004", "TOR-VER-006"),
+          "unknown cells, NaN and a cut: three-valued verdicts, exit 3", check_unknown),
+    Check("mcap-ticks", ("TOR-TCK-002", "TOR-TCK-003", "TOR-LOG-001"),
+          "the tick grid and sample and hold on an MCAP log", check_mcap_ticks),
+    Check("mcap-damage", ("TOR-DMG-001",),
+          "an MCAP log cut short: partial, damage listed, exit 3", check_mcap_damage),
+)
