@@ -100,6 +100,7 @@ def test_shipped_traces_give_the_readme_verdicts(shipped):
                 assert round(t, 3) in times, (log, req, t, times)
 
 
+@pytest.mark.tor("TOR-VER-003")
 def test_r1_violated_in_sif_disabled_at_the_right_second(shipped):
     la = shipped["sif_disabled.mcap"]
     v = _by_req(la)["R1"]
@@ -240,6 +241,7 @@ def test_stage_real_ros1_bag():
 
 # --------------------------------------------------------------------------- CSV traces
 @needs_shared
+@pytest.mark.tor("TOR-VER-001", "TOR-VER-002", "TOR-VER-003", "TOR-TCK-007")
 def test_csv_traces_reproduce_every_fret_interval_verdict(tmp_path, monkeypatch):
     """Every ``expected`` of fret_trace_verdicts.jsonl, by auditing CSV traces written from
     its intervals. (Spot's LTL3 automata are skipped here - slow for durations up to 8 and
@@ -334,6 +336,7 @@ def test_synthetic_log_baseline(tmp_path):
     assert la.messages == {"/cmd": 200, "/flag": 200, "/scan": 200}
 
 
+@pytest.mark.tor("TOR-DMG-001")
 def test_truncated_mcap_is_audited_up_to_the_damage(tmp_path):
     full = _synthetic(tmp_path)
     data = full.read_bytes()
@@ -367,6 +370,7 @@ def test_truncated_shipped_trace_is_reported_partial(tmp_path, safe_ros_plan):
     assert (la.damage_time_ns - la.start_time_ns) / 1e9 < 87.65
 
 
+@pytest.mark.tor("TOR-DMG-001")
 def test_corrupt_chunk_is_reported_not_fatal(tmp_path):
     path = _synthetic(tmp_path, compression=__import__("mcap.writer").writer.CompressionType.NONE)
     data = bytearray(path.read_bytes())
@@ -393,6 +397,7 @@ def test_unknown_schema_is_an_error_for_that_topic_only(tmp_path):
     assert v["A1"].ticks_evaluated == 200 and v["A2"].ticks_evaluated == 200  # to 20 s
 
 
+@pytest.mark.tor("TOR-VER-005")
 def test_missing_topic_and_binding_are_errors_of_the_requirement(tmp_path):
     path = _synthetic(tmp_path)
     (tmp_path / "syn.fret").write_text(SYN_FRET + "A4: the bot shall always satisfy battery > 0.2\n")
@@ -416,6 +421,7 @@ def test_tick_period_mismatch_is_an_input_error(tmp_path):
         assert "syn.bindings.toml" in r.error
 
 
+@pytest.mark.tor("TOR-TCK-004")
 def test_warm_up_ticks_are_not_evaluated_and_reported(tmp_path):
     msgs = []
     for k in range(50):

@@ -62,6 +62,7 @@ def test_main_job_on_the_shipped_traces(tmp_path):
     assert (tmp_path / "b.json").read_text() == out_json.read_text()
 
 
+@pytest.mark.tor("TOR-VER-006")
 def test_exit_0_when_everything_holds_and_json_to_stdout(tmp_path):
     log = _synthetic(tmp_path)
     with open(tmp_path / "syn.fret", "a") as f:  # free-form: kept, not audited, no error

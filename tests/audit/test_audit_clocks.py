@@ -66,6 +66,7 @@ def test_alone_and_in_random_groups_agree_on_two_traces(plan):
 
 @pytest.mark.slow
 @pytest.mark.parametrize("log", TRACES, ids=lambda p: p.name)
+@pytest.mark.tor("TOR-TCK-001")
 def test_alone_and_in_random_groups_agree_on_every_trace(plan, log):
     rng = random.Random(log.name)
     ids = [r.id for r in plan.requirements]

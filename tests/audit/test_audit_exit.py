@@ -54,6 +54,7 @@ def test_a_truncated_copy_of_every_trace_exits_with_the_partial_code(tmp_path, p
 
 @pytest.mark.parametrize("log", [ROOT / "traces" / "sif_disabled.mcap",
                                  ROOT / "traces" / "stop_delay.mcap"], ids=lambda p: p.name)
+@pytest.mark.tor("TOR-DMG-003")
 def test_violations_decided_before_the_damage_are_kept(tmp_path, plan, log):
     """A violation whose obligation was missed before the damage stands on the truncated
     copy, with the same trigger and missed tick times (the partial code does not hide it:
@@ -73,6 +74,7 @@ def test_violations_decided_before_the_damage_are_kept(tmp_path, plan, log):
     assert exit_code([la]) == 1
 
 
+@pytest.mark.tor("TOR-VER-006", "TOR-DMG-001")
 def test_cli_partial_exit_code_allow_partial_and_json(tmp_path):
     cut = _cut(tmp_path, ROOT / "traces" / "unmapped_obstacles.mcap", 0.5)
     run = CliRunner().invoke
@@ -89,6 +91,7 @@ def test_cli_partial_exit_code_allow_partial_and_json(tmp_path):
     assert "Exit codes" in run(main, ["audit", "--help"]).output
 
 
+@pytest.mark.tor("TOR-VER-006")
 def test_exit_codes_are_in_the_docs_and_the_help():
     page = (ROOT / "docs" / "guide" / "audits.md").read_text(encoding="utf-8")
     assert "## Exit codes" in page and "--allow-partial" in page

@@ -122,6 +122,7 @@ def test_difference_agrees_with_reference_evaluator(tmp_path_factory, text, data
             assert ex.tick is not None and 0 <= ex.tick <= n
 
 
+@pytest.mark.tor("TOR-VER-008")
 def test_coverage_json_follows_the_schema(tmp_path):
     import jsonschema
 

@@ -42,6 +42,7 @@ def _grows_after_the_first_read(monkeypatch, path, text: str) -> list[int]:
     return sizes
 
 
+@pytest.mark.tor("TOR-LOG-002")
 def test_rows_appended_between_reads_are_judged_by_no_requirement(tmp_path, monkeypatch):
     """R1 is streamed; R2 reads a NaN at its first row (judged whole, from the second read);
     R3 is streamed and violated at row 500 (its values read again). The rows appended after
@@ -91,6 +92,7 @@ def test_the_audit_of_a_grown_file_equals_the_audit_of_the_file_as_first_read(
 @given(rows=st.lists(st.tuples(st.integers(-5, 5), st.booleans()), min_size=0, max_size=60),
        more=st.lists(st.tuples(st.integers(-5, 5), st.booleans()), min_size=1, max_size=30),
        half=st.booleans())
+@pytest.mark.tor("TOR-LOG-002")
 def test_a_source_reads_its_extent_alone(tmp_path_factory, rows, more, half):
     """Property: a CsvSource given the file's size before rows were appended (or half a row
     more, a writer caught mid-row: refused naming the row's line) reads the rows of

@@ -185,6 +185,7 @@ def _run(tmp_path: Path, log: Path, full: bool) -> int:
 
 
 @pytest.mark.parametrize("log", LOGS, ids=lambda p: p.name)
+@pytest.mark.tor("TOR-DMG-001", "TOR-DMG-003")
 def test_damaged_log_sample(tmp_path, log):
     assert _run(tmp_path, log, full=False) >= 3
 
@@ -201,6 +202,7 @@ def test_every_shipped_trace_and_both_real_logs_are_covered():
     assert all(p.exists() for p in REAL), "the real logs of ../shared/data/logs are missing"
 
 
+@pytest.mark.tor("TOR-DMG-003")
 def test_a_cut_log_never_passes_what_its_prefix_does_not_decide(tmp_path):
     """sif_disabled.mcap cut at byte 201549: R1, R2 and R5 (``always clearance > 0``) are
     violated on the intact log after the cut. Their prefix satisfies them (or never fires

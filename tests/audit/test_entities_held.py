@@ -38,6 +38,7 @@ def _first_out_of_lane(ego=EGO_Y) -> int:
     return S + k * 50 * MS + 25 * MS
 
 
+@pytest.mark.tor("TOR-BND-003")
 def test_an_entity_the_ticks_never_hold_is_unknown_not_vacuous(tmp_path):
     """The filter form reads each car in the message held at the tick: the ego car's never
     is (the other car's comes on every tick). Its verdict says so and C1 is not satisfied."""

@@ -66,6 +66,7 @@ def _files(tmp: Path) -> Path:
 
 @pytest.mark.parametrize("encoding", ["cdr", "json", "cbor", "protobuf"])
 @pytest.mark.parametrize("a,b", PAIRS, ids=["2^53-1", "2^53", "2^64-2"])
+@pytest.mark.tor("TOR-BND-003")
 def test_two_ids_a_double_merges_are_two_entities_and_the_violation_shows(
         tmp_path, encoding, a, b):
     fret = _files(tmp_path)
@@ -97,6 +98,7 @@ def test_the_audit_of_ids_past_2_53_exits_1_and_its_json_names_both(tmp_path, en
 
 @settings(max_examples=30, deadline=None)
 @given(st.integers(0, 2**64 - 1), st.integers(0, 2**64 - 1))
+@pytest.mark.tor("TOR-BND-003")
 def test_the_exact_key_read_is_the_integer_written(a, b):
     """The key extractor and the filter on the entity's key read a uint64 (numpy array,
     numpy scalar, Python int) as the integer it is: two keys are one only when equal."""

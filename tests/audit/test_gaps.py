@@ -8,6 +8,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+import pytest
 from click.testing import CliRunner
 from mcap.reader import make_reader
 
@@ -49,6 +50,7 @@ def _audit(tmp_path: Path, log: Path, bridge_ns: int | None = None):
     return la, {v.requirement: v for v in la.verdicts}
 
 
+@pytest.mark.tor("TOR-DMG-002")
 def test_a_gap_leaves_unknown_only_the_topics_it_may_hold(tmp_path):
     log, bad = _log(tmp_path)
     la, v = _audit(tmp_path, log)
@@ -62,6 +64,7 @@ def test_a_gap_leaves_unknown_only_the_topics_it_may_hold(tmp_path):
     assert la.partial and la.cut_time_ns is None and la.end_time_ns >= S + 299 * S // 10
 
 
+@pytest.mark.tor("TOR-DMG-006")
 def test_bridge_gaps_holds_values_over_the_short_gaps_only(tmp_path):
     log, bad = _log(tmp_path)
     length = bad.message_end_time - bad.message_start_time
@@ -85,6 +88,7 @@ def test_bridge_gaps_holds_values_over_the_short_gaps_only(tmp_path):
     assert bad_value.exit_code == 2 and "--bridge-gaps" in bad_value.output
 
 
+@pytest.mark.tor("TOR-DMG-006")
 def test_a_gap_is_listed_in_the_report(tmp_path):
     log, _bad = _log(tmp_path)
     res = CliRunner().invoke(main, ["report", "-r", str(tmp_path / "r.fret"), str(log),

@@ -137,6 +137,7 @@ def test_item10_the_reason_is_kept_when_the_only_chunk_is_cut(tmp_path, shared):
 
 
 # --------------------------------------------------------------------------- item 11
+@pytest.mark.tor("TOR-TCK-009")
 def test_item11_a_tick_period_giving_too_many_ticks_is_an_error(tmp_path):
     b = tmp_path / "b.bindings.toml"
     b.write_text('[tick]\nperiod = "1 ns"\ntime = "log"\n[variables]\n'

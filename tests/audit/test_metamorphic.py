@@ -114,6 +114,7 @@ def check_alone_and_order(case: M.Case, tmp: Path) -> dict:
 
 
 @pytest.mark.parametrize("case", SAMPLE)
+@pytest.mark.tor("TOR-TCK-001")
 def test_each_verdict_alone_and_in_any_order(case, tmp_path):
     check_alone_and_order(_case(case), tmp_path)
 
@@ -155,6 +156,7 @@ def test_jobs_change_nothing(tmp_path):
 
 # --------------------------------------------------------------------------- 4
 @pytest.mark.parametrize("encoding", ["json", "protobuf"])
+@pytest.mark.tor("TOR-LOG-001")
 def test_a_log_re_encoded_gives_the_same_verdicts(encoding, tmp_path):
     """(cbor carries no schema: a LaserScan's ranges are not known as such there, so REP
     117's reading of their infinities does not apply, and verdicts on them differ.)"""
@@ -203,6 +205,7 @@ def _mcap_cases(full: bool) -> list:
 
 
 @pytest.mark.parametrize("case", _mcap_cases(False))
+@pytest.mark.tor("TOR-DMG-002")
 def test_a_log_cut_in_two_with_a_gap_agrees_with_the_whole(case, tmp_path):
     case = _case(case)
     halves = M.rechunked(case.log, tmp_path / "rechunked.mcap")
@@ -224,6 +227,7 @@ def test_a_corrupted_chunk_never_hides_a_violation_elsewhere(case, where, tmp_pa
     check_gap(case, tmp_path, tmp_path / "bad.mcap", gap)
 
 
+@pytest.mark.tor("TOR-DMG-001", "TOR-VER-004")
 def test_a_violation_after_a_corrupted_chunk_is_violated(tmp_path):
     """The issue's MCAP: a chunk corrupted at 30 % of the run, a violation at 80 %: still
     violated, with the same first violation; an invariant that holds on every message read
@@ -282,6 +286,7 @@ def check_watch_clock_and_csv(case: M.Case, tmp: Path, monkeypatch) -> None:
 
 
 @pytest.mark.parametrize("case", SAMPLE)
+@pytest.mark.tor("TOR-LOG-001", "TOR-WCH-001")
 def test_the_watch_clock_and_the_sampled_csv_give_the_audit(case, tmp_path, monkeypatch):
     check_watch_clock_and_csv(_case(case), tmp_path, monkeypatch)
 

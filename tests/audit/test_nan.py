@@ -83,6 +83,7 @@ def test_division_by_zero_in_the_requirement_is_nan(tmp_path):
     ([1.0, 1.0, math.nan, 1.0], "unknown"),   # an invariant that held on every tick read
     ([1.0, 1.0, 1.0], "satisfied"),
 ])
+@pytest.mark.tor("TOR-DMG-004")
 def test_verdicts_decided_around_the_nan_stand(tmp_path, values, r1):
     la = audit_log(_plan(tmp_path), str(_log(tmp_path / "m.mcap", values)))
     got = _got(la)
@@ -112,6 +113,7 @@ def test_an_unknown_nan_policy_is_an_input_error():
                   max_size=12),
        c=st.sampled_from(["x < 5", "!(x >= 5)", "x = 1", "x", "persisted(2, x > 0)",
                           "x + 1 < 5 & y"]))
+@pytest.mark.tor("TOR-DMG-004")
 def test_nan_ticks_are_where_a_comparison_reads_nan(x, c):
     req = parse(f"agent shall always satisfy {c}")
     n = len(x)

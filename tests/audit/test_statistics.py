@@ -44,6 +44,7 @@ def _audit(fleet, p, *extra):
     return res, json.loads(out.read_text()), ET.parse(out.with_suffix(".xml")).getroot()
 
 
+@pytest.mark.tor("TOR-VER-010")
 def test_630_of_1000_holds_at_half_with_scipys_interval(fleet):
     res, doc, junit = _audit(fleet, "0.5")
     assert res.exit_code == 0, res.output  # 370 violated runs, yet the bound holds
@@ -99,6 +100,7 @@ def _logs(verdicts: list[str]) -> list[LogAudit]:
             for i, v in enumerate(verdicts)]
 
 
+@pytest.mark.tor("TOR-VER-010")
 def test_unknown_runs_are_never_satisfied():
     logs = _logs(["satisfied"] * 18 + ["unknown"] * 2)
     b = {"P": ProbabilityBound(">=", "0.5")}
@@ -138,6 +140,7 @@ def test_undecided_says_how_many_more_runs():
     assert more_runs(">=", 0.5, half, 0.95) is None  # the rate is the bound: never
 
 
+@pytest.mark.tor("TOR-VER-006", "TOR-VER-010")
 def test_exit_codes_follow_the_statistical_verdict():
     logs = _logs(["satisfied"] * 3 + ["violated"])
     b = {"P": ProbabilityBound(">=", "0.5")}

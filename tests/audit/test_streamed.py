@@ -140,6 +140,7 @@ _TRACES = (st.integers(1, 60), st.booleans(),
 
 @settings(max_examples=25, deadline=None)
 @given(*_TRACES)
+@pytest.mark.tor("TOR-LOG-003")
 def test_the_streamed_audit_is_the_whole_trace_audit(tmp_path_factory, n, timed, marks, rows,
                                                      chunk, rnd):
     check_trace(tmp_path_factory, n, timed, marks, rows, chunk, rnd)
@@ -172,6 +173,7 @@ def check_trace(tmp_path_factory, n: int, timed: bool, marks: str, rows: int, ch
         assert streamed_ids == {r.id for r in plan.requirements} - WHOLE, decided["whole"]
 
 
+@pytest.mark.tor("TOR-LOG-003")
 def test_what_sends_a_requirement_back_to_the_whole_trace_judge(plan, tmp_path):
     """A NaN read by a comparison sends back the requirements comparing ``x`` only; an
     ``unknown`` cell those reading its column; a ``gap`` or ``cut`` row every one. The

@@ -74,6 +74,7 @@ def _lasso_defeats(items, prefix: list[dict], cycle: list[dict]) -> bool:
        st.lists(st.tuples(st.sampled_from(_LIVENESS), st.sampled_from(_LITERALS),
                           st.sampled_from(_LITERALS), st.sampled_from(["i", "o", "j"])),
                 min_size=1, max_size=2))
+@pytest.mark.tor("TOR-CHK-003")
 def test_buchi_game_agrees_with_spot(tmp_path, safety, liveness):
     """Random sets with an ``eventually`` or ``until`` (inputs i, j, m; outputs o, p;
     bounds up to 8 ticks): the Büchi game (engine auto) and Spot's game (engine spot) give
@@ -126,6 +127,7 @@ def test_a_recurrence_spot_translates_nondeterministically(tmp_path):
     assert comp["realizable"] is True and comp["method"] == "Büchi game", comp
 
 
+@pytest.mark.tor("TOR-CHK-001", "TOR-CHK-003")
 def test_lost_game_lasso_replays_through_the_audit(tmp_path):
     """``eventually`` against a 50-tick hold the environment re-triggers every other tick:
     unrealizable; the input lasso (Spot's check: it defeats every controller) with a

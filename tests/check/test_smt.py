@@ -76,6 +76,7 @@ def _answers(result) -> dict:
 
 @settings(max_examples=4)
 @given(_SET)
+@pytest.mark.tor("TOR-CHK-002")
 def test_smt_and_spot_agree_on_random_sets(tmp_path_factory, parts):
     """Every check (satisfiability, non-vacuity, redundancy, minimal subsets) answers alike
     by Spot and by z3 on bounds up to 12, where neither is unknown."""
@@ -198,6 +199,7 @@ def test_consistent_sets_with_deadlines_are_decided(tmp_path, n):
     "C1: upon p the sw shall within 30 ticks satisfy q\n"
     "C2: whenever q the sw shall immediately satisfy r\n",
 ])
+@pytest.mark.tor("TOR-CHK-001", "TOR-CHK-002")
 def test_witnesses_past_spot_bounds_replay_through_the_audit(tmp_path, text):
     """Findings at bounds z3 decides come with witness CSVs; fretc audit gives the verdicts
     their headers promise, and they show the finding."""
@@ -229,6 +231,7 @@ def test_safe_ros_requirements_at_50_hz(tmp_path):
                for r in doc["requirements"])
 
 
+@pytest.mark.tor("TOR-CHK-002")
 def test_unencodable_formula_is_unknown_with_reason():
     """A past-time operator inside a future formula has no z3 encoding: unknown, why kept."""
     s = SmtSolver()

@@ -31,6 +31,7 @@ def victim(tmp_path) -> Path:
     return v
 
 
+@pytest.mark.tor("TOR-OUT-002")
 def test_write_file_replaces_a_symbolic_link_never_its_target(tmp_path, victim):
     from fretc.common import outputs
 
@@ -62,6 +63,7 @@ def test_written_files_are_made_as_open_would_and_leave_no_temporary(tmp_path):
     assert [p.name for p in tmp_path.iterdir()] == ["a.txt"]
 
 
+@pytest.mark.tor("TOR-OUT-002")
 def test_a_failed_write_keeps_the_old_file_and_no_temporary(tmp_path):
     from fretc.common import outputs
 

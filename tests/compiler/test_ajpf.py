@@ -18,6 +18,7 @@ def compiled(rid: str, text: str):
         tick_period=None, requirement=parse(text), error=None, extra={}))
 
 
+@pytest.mark.tor("TOR-GEN-004")
 def test_r1_is_the_property_safe_ros_verified():
     out = emit_psl([compiled("R1", "whenever too_close agilex_agent shall eventually "
                                    "satisfy stopped")])
@@ -25,6 +26,7 @@ def test_r1_is_the_property_safe_ros_verified():
     assert lines == ["R1: [] (B(agilex_agent,too_close) -> <> B(agilex_agent,stopped))"]
 
 
+@pytest.mark.tor("TOR-GEN-004")
 def test_iff_and_xor_are_rewritten_and_binary_parenthesized():
     f = formalize(parse("the sw shall always satisfy (a <-> b) | (c xor d)")).ft_inf
     text = to_ajpf(f, "ag", {})
@@ -41,6 +43,7 @@ def test_iff_and_xor_are_rewritten_and_binary_parenthesized():
     ("whenever persisted(2, p) the sw shall eventually satisfy q", "past-time"),
     ("the sw shall always satisfy Q_high", "Gwendolen term"),
 ])
+@pytest.mark.tor("TOR-GEN-004")
 def test_refusals_say_why(text, reason):
     with pytest.raises(AjpfError, match=reason):
         to_ajpf(formalize(parse(text)).ft_inf, "sw", {})

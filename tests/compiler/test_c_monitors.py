@@ -85,6 +85,7 @@ def fret_vectors(tmp_path_factory):
 
 
 @needs_shared
+@pytest.mark.tor("TOR-GEN-001", "TOR-GEN-003")
 def test_fret_trace_verdicts_tick_by_tick(fret_vectors):
     """Every case of fret_trace_verdicts.jsonl: the C monitor's finish() is FRET's verdict,
     and at every tick its pt verdict, LTL3 verdict and LTL3 tick are the Python monitor's."""
@@ -133,6 +134,7 @@ def keys_at_real_bounds(tmp_path_factory):
     return Built(compiled, tmp_path_factory.mktemp("keys"), "keys", True)
 
 
+@pytest.mark.tor("TOR-GEN-003")
 def test_every_key_at_real_bounds(keys_at_real_bounds):
     """Each of the 288 keys on 12 random traces of up to 30 ticks: per tick the Python
     monitor's pt verdict and LTL3 verdict; at the end the audit's word (satisfied, vacuous,
@@ -195,6 +197,7 @@ _states = st.fixed_dictionaries({**{v: st.booleans() for v in _BOOLS},
 
 @settings(max_examples=150, deadline=None)
 @given(data=st.data())
+@pytest.mark.tor("TOR-GEN-003")
 def test_hypothesis_traces(mixed, data):
     """Hypothesis-drawn traces over requirements with arithmetic, division and mod by zero,
     powers, min/max, preReal, persisted/occurred windows and numeric conditions: the C
@@ -247,6 +250,7 @@ def _code(text: str) -> str:
     return re.sub(r"/\*.*?\*/", "", text, flags=re.S)
 
 
+@pytest.mark.tor("TOR-GEN-003")
 def test_constant_memory_and_no_floating_point_without_numbers():
     """No allocation, recursion or loop in a monitor's code; no floating point in a file
     whose requirements compare no number; the state's size stated in the header."""
@@ -279,6 +283,7 @@ def test_deterministic_and_split(tmp_path):
     build(tmp_path, sorted(f for f in files if f.endswith(".c")), "runner")
 
 
+@pytest.mark.tor("TOR-GEN-005")
 def test_hostile_names_and_texts(tmp_path):
     """Ids, texts and variable names that are not C: quotes, comment ends, trigraphs,
     backslashes, line breaks and non-ASCII reach the C text escaped; it builds and the

@@ -14,6 +14,7 @@ SENTENCES = 150
 
 
 @pytest.mark.parametrize("chunk", range(5))
+@pytest.mark.tor("TOR-SEM-002", "TOR-SEM-003", "TOR-SEM-004", "TOR-SEM-008")
 def test_random_sentences_agree_with_the_oracle(chunk):
     rnd = random.Random(1000 + chunk)
     for _ in range(SENTENCES // 5):
@@ -69,6 +70,7 @@ def test_oracle_requirement_truth():
     "only before persisted(1, 2, p) the sw shall always satisfy !q",
     "in m the sw shall always satisfy occurred(2, 3, p) | q",
 ])
+@pytest.mark.tor("TOR-SEM-005", "TOR-SEM-006", "TOR-SEM-007")
 def test_interval_evidence_follows_the_formulas(sentence):
     """monitors/interval.py's direct interval semantics gives the ft verdict for bounded
     occurred/persisted and for functions inside scope conditions (endpoint-free)."""

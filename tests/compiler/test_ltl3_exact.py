@@ -99,6 +99,7 @@ SAMPLE = params(lambda: random.Random(11).sample(_verdict_sentences(), 40)) + \
 
 
 @pytest.mark.parametrize("sentence", SAMPLE)
+@pytest.mark.tor("TOR-VER-009", "TOR-GEN-002")
 def test_ltl3_tables_equal_spots(sentence):
     assert check_exact(sentence)
 

@@ -33,6 +33,7 @@ def _spot(*trees):
 
 
 @needs_shared
+@pytest.mark.tor("TOR-SEM-011")
 def test_45_vectors_keys_and_refusals_as_fret():
     assert len(VECTORS) == 45
     for v in VECTORS:
@@ -47,6 +48,7 @@ def test_45_vectors_keys_and_refusals_as_fret():
 
 @needs_shared
 @pytest.mark.parametrize("v", ACCEPTED, ids=[v["id"] for v in ACCEPTED])
+@pytest.mark.tor("TOR-SEM-011")
 def test_bounds_where_fret_puts_them_and_path_is_ft_inf(v):
     req = parse(v["text"])
     form = pctl_of(req)
@@ -136,6 +138,7 @@ def _unders_by_pair() -> dict:
     return out
 
 
+@pytest.mark.tor("TOR-SEM-011")
 def test_all_576_keys_have_fret_bound_structure():
     assert len(KEYS) == 576
     fret = _unders_by_pair() if ACCEPTED else {}

@@ -64,6 +64,7 @@ def _vector_ids(pred):
 @pytest.mark.parametrize("vec", _vector_ids(lambda v: not v["parse_error"]
                                             and not v["fret_defect"]
                                             and v["id"] not in OUR_REJECTIONS))
+@pytest.mark.tor("TOR-SEM-001", "TOR-SEM-002", "TOR-SEM-004")
 def test_formulas_agree_with_fret_on_random_traces(vec):
     f = formalize(parse(vec["text"]))
     assert f.key == vec["key"]
@@ -141,6 +142,7 @@ def _check_function_vector(vec, n):
 
 @needs_shared
 @pytest.mark.parametrize("vec,n", _function_vector_ids(slow=False))
+@pytest.mark.tor("TOR-SEM-008")
 def test_function_vectors_agree_with_fret(vec, n):
     _check_function_vector(vec, n)
 
@@ -173,6 +175,7 @@ def test_fret_rejections(vec):
 
 
 @needs_shared
+@pytest.mark.tor("TOR-SEM-009")
 def test_fret_defects_are_fixed():
     by_id = {v["id"]: v for v in VECTORS}
     # defect 1: ~p is negation
@@ -201,6 +204,7 @@ def test_our_rejections(text, fret_id):
 
 # --------------------------------------------------------------------------- FRET verdicts
 @needs_shared
+@pytest.mark.tor("TOR-SEM-002", "TOR-SEM-005", "TOR-SEM-006", "TOR-SEM-007")
 def test_every_fret_trace_verdict():
     checked = 0
     for case in VERDICTS:
@@ -247,6 +251,7 @@ def _random_traces(seed: int, count: int) -> list[list[dict[str, bool]]]:
 @pytest.mark.parametrize("scope,cond,timing", KEYS, ids=[",".join(k) for k in KEYS])
 @settings(max_examples=20, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(data=st.data())
+@pytest.mark.tor("TOR-SEM-003")
 def test_ft_equals_pt_for_every_template(scope, cond, timing, data):
     sp = data.draw(st.sampled_from(SCOPE_PHRASES[scope]))
     cp = data.draw(st.sampled_from(CONDITION_PHRASES[cond]))
@@ -263,6 +268,7 @@ def test_ft_equals_pt_for_every_template(scope, cond, timing, data):
 
 
 # --------------------------------------------------------------------------- durations
+@pytest.mark.tor("TOR-SEM-010")
 def test_durations_convert_with_a_tick_period():
     req = parse("upon p the sw shall within 2 seconds satisfy q")
     f = formalize(req, tick_period=Fraction(1, 10))
@@ -276,12 +282,14 @@ def test_durations_convert_with_a_tick_period():
     assert f.ticks == 5
 
 
+@pytest.mark.tor("TOR-SEM-010")
 def test_inexact_duration_is_an_error():
     with pytest.raises(SemanticsError, match="not a whole number of ticks"):
         formalize(parse("upon p the sw shall within 150 milliseconds satisfy q"),
                   tick_period=Fraction(1, 10))
 
 
+@pytest.mark.tor("TOR-SEM-010")
 def test_units_without_tick_period_behave_like_fret_and_warn():
     f = formalize(parse("upon p the sw shall within 3 seconds satisfy q"))
     assert f.ticks == 3
@@ -317,12 +325,14 @@ def test_r1_formulas_are_the_papers():
     ("while prevOcc(p, q) the sw shall always satisfy r",
      [{"p": False, "r": False}, {"p": False, "r": False}], True),
 ])
+@pytest.mark.tor("TOR-SEM-008")
 def test_function_semantics(sentence, trace, expected):
     f = formalize(parse(sentence))
     assert ft_at(f.ft, trace) == expected
     assert pt_at(f.pt, trace) == expected
 
 
+@pytest.mark.tor("TOR-SEM-012")
 def test_fret_name_mangling():
     f = formalize(parse('in "flight phase" mode the sw shall always satisfy '
                         '"weird var" & ROS.ok & x% > "temp [C]"'))

@@ -20,7 +20,7 @@ ROOT = Path(__file__).resolve().parents[2]
 README = ROOT / "README.md"
 #: the packages of the library, the benchmarks and the tests: their comments and docstrings
 CODE_FOLDERS = ("common", "fretish", "compiler", "check", "monitors", "fretc", "sim",
-                "templates", "bench", "tests")
+                "templates", "bench", "tests", "qualification")
 #: a tracker reference ("issue 9", "(issue", "issue #4") or an instruction count
 ISSUE = re.compile(r"[Ii]ssue #?\d|\(issue|\binstructions\b")
 

@@ -57,6 +57,7 @@ def test_audit_write_csv_into_the_folder_of_its_input_csvs_is_refused(runs):
 
 @pytest.mark.parametrize("option,target", [("--json", "r.fret"), ("--junit", "runs/a.csv"),
                                            ("--json", "runs/b.csv")])
+@pytest.mark.tor("TOR-OUT-001")
 def test_audit_json_or_junit_naming_an_input_is_refused(runs, option, target):
     before = _snapshot(runs)
     got = _run("audit", runs / "runs" / "a.csv", runs / "runs" / "b.csv", "-r", runs / "r.fret",
@@ -67,6 +68,7 @@ def test_audit_json_or_junit_naming_an_input_is_refused(runs, option, target):
 
 
 @pytest.mark.parametrize("how", ["symlink", "hardlink", "dotdot"])
+@pytest.mark.tor("TOR-OUT-001")
 def test_an_input_reached_another_way_is_the_same_input(runs, how):
     """Resolved, links followed; a hard link by its inode."""
     a = runs / "runs" / "a.csv"
@@ -130,6 +132,7 @@ def shield_dir(tmp_path_factory) -> Path:
     return docs_shield(tmp_path_factory.mktemp("shield"))
 
 
+@pytest.mark.tor("TOR-OUT-001")
 def test_shield_replay_output_that_is_its_second_input_is_refused(shield_dir, tmp_path):
     """R1's input: d/a.mcap and d/a.shielded.mcap given, -o d. Before, the second was
     overwritten with the first's replay before it was read, and reported on (exit 0)."""

@@ -17,6 +17,7 @@ def error_of(text, **kw) -> FretishSyntaxError:
 
 
 # --------------------------------------------------------------------------- diagnostics
+@pytest.mark.tor("TOR-GRM-002")
 def test_error_rendering_like_a_compiler():
     e = error_of("the sw shall always satisfy p and q", source="r1.fret", line=3, column=5)
     assert (e.source, e.line, e.column) == ("r1.fret", 3, 5 + 30)
@@ -109,6 +110,7 @@ def test_unexpected_characters_and_strings():
     assert e.message == "empty requirement"
 
 
+@pytest.mark.tor("TOR-GRM-002")
 def test_no_lark_exception_escapes():
     import lark
     for text in ["", "(", ")", "shall", "the", '"', "upon", "in", "the sw shall satisfy (((",

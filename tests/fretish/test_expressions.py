@@ -66,6 +66,7 @@ from fretc.fretish.words import FRET_RESERVED
     ("-(3)", "(- 3)"),
     ("- -3", "(- -3)"),
 ])
+@pytest.mark.tor("TOR-GRM-003")
 def test_precedence_table(text, expected):
     assert fret_text(parse_expression(text)) == expected
 

@@ -111,6 +111,7 @@ def test_reserved_words_match_grammar_keywords():
 # --------------------------------------------------------------------------- FRET vectors
 @needs_shared
 @pytest.mark.parametrize("v", VECTORS, ids=lambda v: f"v{v['id']}")
+@pytest.mark.tor("TOR-GRM-001")
 def test_fret_vector(v):
     vid = v["id"]
     if vid in ACCEPTED_FRET_REJECTS:
@@ -134,6 +135,7 @@ def test_every_listed_exception_is_a_vector():
 
 
 @needs_shared
+@pytest.mark.tor("TOR-SEM-009")
 def test_fixed_defects_mean_what_they_say():
     r = parse(VECTOR_BY_ID[26]["text"])                      # upon p is false
     assert r.condition.expr == A.Unary("!", A.Var("p"))
@@ -176,6 +178,7 @@ def test_printed_parenthesization_matches_fret(v):
     (86, "(ROS_DOT_state = 2)"),
 ])
 @needs_shared
+@pytest.mark.tor("TOR-GRM-003")
 def test_precedence_against_fret(vid, expected):
     v = VECTOR_BY_ID[vid]
     assert expected in v["ft"]
@@ -185,6 +188,7 @@ def test_precedence_against_fret(vid, expected):
 # --------------------------------------------------------------------------- real corpora
 @needs_shared
 @pytest.mark.parametrize("req", CORPUS, ids=lambda r: r["id"])
+@pytest.mark.tor("TOR-GRM-001")
 def test_case_study_corpus(req):
     if req["id"] in CORPUS_REJECTED:
         _why, needle = CORPUS_REJECTED[req["id"]]
@@ -373,12 +377,14 @@ def test_component_forms():
     assert text[r.response_span.start:r.response_span.end] == "satisfy q"
 
 
+@pytest.mark.tor("TOR-GRM-004")
 def test_freeform():
     r = parse('"The system shall be nice, # really."')
     assert r.freeform and r.key is None and r.text == '"The system shall be nice, # really."'
     assert parse('  "free"  .').freeform
 
 
+@pytest.mark.tor("TOR-GRM-001")
 def test_trailing_dot_and_whitespace():
     a = parse("  The sw shall, until stop, satisfy post.  ")
     b = parse("the sw shall until stop satisfy post")

@@ -79,6 +79,7 @@ def _watch_trace(plan, trace, rate=RATE, record=None, at=None, backoff=0.05):
 
 
 @pytest.mark.parametrize("trace", TRACES, ids=[t.stem for t in TRACES])
+@pytest.mark.tor("TOR-WCH-001")
 def test_watch_equals_audit(plan, trace):
     w, la, done = _watch_trace(plan, trace)
     ref = audit_log(plan, str(trace))
@@ -94,6 +95,7 @@ def test_watch_equals_audit(plan, trace):
     assert finals == {v.requirement: v.verdict for v in ref.verdicts}
 
 
+@pytest.mark.tor("TOR-WCH-001")
 def test_recorded_watch_audits_to_the_same_verdicts(plan, tmp_path):
     out = tmp_path / "watched.mcap"
     _w, la, _ = _watch_trace(plan, ROOT / "traces" / "stop_delay.mcap", record=str(out))
@@ -107,6 +109,7 @@ def test_recorded_watch_audits_to_the_same_verdicts(plan, tmp_path):
     assert "/fretc/verdicts" in topics
 
 
+@pytest.mark.tor("TOR-WCH-002")
 def test_dropped_connection_is_a_gap_and_the_watch_goes_on(plan):
     trace = ROOT / "traces" / "sif_disabled.mcap"
     state = {}

@@ -101,6 +101,7 @@ def _verdicts(la) -> dict:
     # /b silent from 0.5 s, its publisher gone for good at 1 s: past RD's last tick
     (500, None, False, 1000),
 ])
+@pytest.mark.tor("TOR-WCH-001", "TOR-WCH-002")
 def test_the_audit_of_the_recording_equals_the_watch_when_a_publisher_leaves(
         plan, tmp_path, b_until, b_back, restart, b_leave):
     rec = tmp_path / "run.mcap"

@@ -183,6 +183,7 @@ class _Client:
         self.events = events
 
 
+@pytest.mark.tor("TOR-WCH-002")
 def test_the_bounded_queue_drops_the_oldest_messages_and_the_watch_makes_them_a_gap():
     q = EventQueue(max_messages=5)
     q.put(("connected", 0, "foxglove.websocket.v1", ""))

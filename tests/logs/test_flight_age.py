@@ -55,6 +55,7 @@ def _first_stale_tick(first_tick: int, last_gps: int, limit_ns: int) -> int:
 
 
 @pytest.mark.parametrize("gps_rows", [20, 40])
+@pytest.mark.tor("TOR-TCK-006")
 def test_a_px4_gps_that_dies_before_the_end_of_the_flight_is_stale(tmp_path, gps_rows):
     log = _ulog(tmp_path, gps_rows)
     assert open_log(log).log_end == (1_000_000 + 49 * 100_000) * 1000  # vehicle_status's

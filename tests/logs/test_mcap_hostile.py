@@ -43,6 +43,7 @@ def _peak(fn) -> int:
 
 
 @pytest.mark.parametrize("codec", ["zstd", "lz4"])
+@pytest.mark.tor("TOR-DMG-005")
 def test_a_bomb_is_stopped_at_the_declared_size(codec):
     data = (_zstd_zeros(64 * _MB) if codec == "zstd"
             else lz4.frame.compress(bytes(64 * _MB)))
@@ -51,6 +52,7 @@ def test_a_bomb_is_stopped_at_the_declared_size(codec):
     assert _peak(lambda: decompress(codec, data, 1000)) < 4 * _MB
 
 
+@pytest.mark.tor("TOR-DMG-005")
 def test_a_declared_size_above_the_cap_is_damage_without_allocation(monkeypatch):
     data = _zstd_zeros(4 * _MB)
     with pytest.raises(ValueError, match="above the cap"):

@@ -67,6 +67,7 @@ def same(a, b) -> bool:
 
 
 @pytest.mark.parametrize("path", TRACES + REAL, ids=lambda p: p.name)
+@pytest.mark.tor("TOR-LOG-001")
 def test_every_field_of_every_log_equals_the_full_decode(path):
     full = list(open_log(path).messages())
     wanted = {}

@@ -9,6 +9,7 @@ import math
 import random
 from types import SimpleNamespace
 
+import pytest
 import numpy as np
 from hypothesis import given, settings
 from hypothesis import strategies as st
@@ -21,6 +22,7 @@ from fretc.monitors.interval import trigger_points
 from _monitor_helpers import KEYS, compiled, load_module, random_trace, requirement, samples
 
 
+@pytest.mark.tor("TOR-GEN-001")
 def test_replay_equals_stepping_the_generated_monitor():
     responses = ["r", "x > 2", "r | s"]
     reqs = [compiled(requirement(s, c, t, response=responses[i % 3], condition="c & x <= 3",
@@ -40,6 +42,7 @@ def test_replay_equals_stepping_the_generated_monitor():
 
 @settings(max_examples=150, deadline=None)
 @given(st.lists(st.booleans(), min_size=1, max_size=30), st.data())
+@pytest.mark.tor("TOR-SEM-006")
 def test_trigger_points_follow_fret_definition(values, data):
     C = np.array(values, dtype=np.bool_)
     n = len(C)

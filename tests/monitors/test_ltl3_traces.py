@@ -29,6 +29,7 @@ def automata_and_traces(draw):
 
 @settings(max_examples=300, deadline=None)
 @given(case=automata_and_traces(), together=st.sampled_from([0, 1, 3, 32]))
+@pytest.mark.tor("TOR-VER-009", "TOR-GEN-002")
 def test_the_first_rejection_of_each_trace_is_its_own(case, together, monkeypatch_session):
     table, initial, lengths, letters = case
     monkeypatch_session.setattr(J, "STEP_TOGETHER", together)

@@ -164,6 +164,7 @@ def _check_tick(pt, rob):
         assert t == 0 or m[t - 1] != rob.value
 
 
+@pytest.mark.tor("TOR-VER-007")
 def test_every_template_key_against_brute_force(all_keys):
     rnd = random.Random(29)
     for comp in all_keys:
@@ -243,6 +244,7 @@ def test_any_past_formula_end_to_end_gives_each_traces_own_robustness(pt, length
         assert r.margin.tobytes() == alone.margin.tobytes(), pt
 
 
+@pytest.mark.tor("TOR-VER-007")
 def test_numeric_margin_is_the_distance_to_the_threshold():
     """``always x <= 0.5``: the least margin, where it first occurs; a strict comparison at
     its threshold is violated at distance 0 (-TINY), a non-strict one satisfied (0.0)."""

@@ -9,6 +9,7 @@ from __future__ import annotations
 import itertools
 from pathlib import Path
 
+import pytest
 import numpy as np
 from hypothesis import given, settings, strategies as st
 
@@ -62,6 +63,7 @@ _row = st.tuples(st.booleans(), st.booleans(), st.booleans(), st.sampled_from([0
 @settings(max_examples=300, deadline=None)
 @given(text=st.sampled_from(SENTENCES), rows=st.lists(_row, min_size=1, max_size=7),
        holes=st.lists(st.tuples(st.integers(0, 6), st.sampled_from("pqmx")), max_size=3))
+@pytest.mark.tor("TOR-VER-004")
 def test_a_verdict_is_what_every_completion_gives(text, rows, holes):
     c, ms = _compiled_of(text)
     f = c.formalization
@@ -99,6 +101,7 @@ def test_a_verdict_is_what_every_completion_gives(text, rows, holes):
 @given(kept=st.lists(st.integers(0, 40), min_size=1, max_size=12, unique=True),
        lost=st.lists(st.integers(0, 40), max_size=4, unique=True),
        ticks=st.lists(st.integers(0, 45), min_size=1, max_size=10, unique=True))
+@pytest.mark.tor("TOR-DMG-002")
 def test_a_gap_leaves_unknown_the_ticks_a_lost_message_could_hold(kept, lost, ticks):
     """Point gaps (one lost message each): a tick is unknown exactly when a lost message is
     at or before it and not older than the message it holds."""
@@ -162,6 +165,7 @@ def test_the_triggers_counted_are_in_every_completion(text, rows, holes):
             (text, rows, cells, combo, counted)
 
 
+@pytest.mark.tor("TOR-VER-004")
 def test_a_trigger_before_an_unknown_scope_end_is_counted():
     text = "only after m the sw shall never satisfy p"
     cols = {"m": np.array([True, True, True]), "p": np.array([False, False, False])}

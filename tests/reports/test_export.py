@@ -304,6 +304,7 @@ def test_reqif_export_stays_well_formed_keeps_id_references_and_is_idempotent(tm
 
 @pytest.mark.parametrize("mutate", ["logs_str", "verdict_list", "log_none", "ticks_str",
                                     "reqs_str", "deep"])
+@pytest.mark.tor("TOR-VER-008")
 def test_a_from_json_document_that_breaks_the_schema_is_an_input_error(audits, tmp_path,
                                                                         mutate):
     """18 internal errors (exit 4) of export and report on audit documents of the right

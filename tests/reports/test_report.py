@@ -304,6 +304,7 @@ def test_markdown_has_the_same_content(shipped):
     assert "R1: [] (B(agilex_agent,too_close) -> <> B(agilex_agent,stopped))" in md
 
 
+@pytest.mark.tor("TOR-OUT-002")
 def test_same_inputs_same_report_and_from_json_equals_live(shipped, tmp_path):
     out = shipped["out"]
     again = tmp_path / "report"          # the same layout as the fixture's: ../annotated

@@ -59,6 +59,7 @@ def under(tmp_path_factory):
                                        assumptions=assumed)
 
 
+@pytest.mark.tor("TOR-SHD-002")
 def test_a_requirement_over_inputs_is_enforced_only_under_assumptions(tmp_path, under):
     reqs, assumed, shield = under
     alone = build_shield(reqs, ["b", "d"], ["go"], fork=False)
@@ -107,6 +108,7 @@ def test_an_assumption_that_reads_an_output_now_is_refused(tmp_path):
 @settings(max_examples=30, deadline=None)
 @given(st.lists(st.tuples(st.booleans(), st.floats(-0.4, 0.6), st.booleans()),
                 min_size=1, max_size=40))
+@pytest.mark.tor("TOR-SHD-002")
 def test_runs_that_keep_the_assumptions_keep_the_requirements(under, steps):
     """Random runs whose ``d`` keeps A0..A2 (each tick's change drawn, then cut to what the
     assumptions allow given the shield's last output), random proposals: R1 and R2 are
@@ -187,6 +189,7 @@ def test_a_broken_assumption_never_turns_the_shield_against_a_correct_controller
      "under A5 no run of the closed loop fires its trigger"),
     ("A1: environment shall always satisfy a & !a",
      "no run of the closed loop keeps the assumptions A1: nothing is proved")])
+@pytest.mark.tor("TOR-SHD-002")
 def test_prove_never_calls_an_impossible_or_vacuous_assumption_proved(tmp_path, assumption,
                                                                       why):
     """The Safety System round: an assumption no run can keep (A1) was "proved" without a word, and one that

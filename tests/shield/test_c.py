@@ -64,6 +64,7 @@ def _same(shield, rows, c_rows) -> None:
 @settings(max_examples=12, deadline=None,
           suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
 @given(text=requirement_sets(), rows=runs(length=60))
+@pytest.mark.tor("TOR-SHD-004")
 def test_c_and_python_shields_decide_alike(text, rows):
     needs_cc()
     with tempfile.TemporaryDirectory() as tmp:

@@ -20,6 +20,7 @@ import subprocess
 import tempfile
 from pathlib import Path
 
+import pytest
 from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 
@@ -112,6 +113,7 @@ def assert_alike(shield, rows: list[tuple[dict, dict]]) -> list:
 @settings(max_examples=6, deadline=None,
           suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
 @given(text=requirement_sets(), rows=runs())
+@pytest.mark.tor("TOR-SHD-004")
 def test_c_and_python_decide_alike_on_nan_inputs(text, rows):
     needs_cc()
     with tempfile.TemporaryDirectory() as tmp:
@@ -167,6 +169,7 @@ def test_a_belief_past_its_bound_is_lost_at_the_same_tick_in_both_forms(tmp_path
     assert all({v: d.outputs[v] for v in fb} == fb for d in decisions[lost[0]:])
 
 
+@pytest.mark.tor("TOR-SHD-004")
 def test_more_free_comparisons_than_the_c_bound_lose_the_machine_in_c(tmp_path):
     """The one place the forms differ, by design: the C form tries the 2^k valuations of the
     k input atoms a tick's NaN inputs leave free, k at most C_FREE_LIMIT; a machine with more

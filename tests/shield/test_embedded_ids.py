@@ -105,6 +105,7 @@ def test_java_string_is_one_ascii_literal_whose_translation_has_no_break(text):
 
 @settings(max_examples=300)
 @given(_HOSTILE_TEXT)
+@pytest.mark.tor("TOR-GEN-005")
 def test_python_doc_reads_back_in_a_docstring(text):
     doc = python_doc(text)
     source = f'"""{doc}"""\n'
@@ -114,6 +115,7 @@ def test_python_doc_reads_back_in_a_docstring(text):
 
 
 # ------------------------------------------------------------------ the findings' inputs
+@pytest.mark.tor("TOR-GEN-005")
 def test_j1_a_line_break_or_java_escape_in_an_id_runs_no_java(tmp_path):
     """The finding: the Gwendolen form's ``N_shield.java`` compiled and loaded runs no
     injected code, and its comment reads back as the ids."""

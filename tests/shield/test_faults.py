@@ -33,6 +33,7 @@ import subprocess
 import tempfile
 from pathlib import Path
 
+import pytest
 from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 
@@ -207,6 +208,7 @@ def judged(shield, run) -> list:
 
 @SETTINGS
 @given(text=requirement_sets(), run=faulty_runs())
+@pytest.mark.tor("TOR-SHD-003")
 def test_an_unread_input_is_any_value_and_no_trigger_is_lost(text, run):
     compiled, shield = _shield(text)
     decisions = judged(shield, run)
@@ -240,6 +242,7 @@ def test_the_issue_example_nan_at_f1s_deadline_moves_no_machine(tmp_path):
     assert verdicts(compiled, rows) == {"F1": "satisfied", "F2": "satisfied"}, rows
 
 
+@pytest.mark.tor("TOR-SHD-003")
 def test_a_nan_in_another_requirements_input_loses_no_trigger(tmp_path):
     """The Safety System round's case: ``G1: upon a ctrl shall for 3 ticks satisfy o``, ``G2: whenever x >
     2 ctrl shall immediately satisfy !p``; ``a = true, x = NaN`` at tick 0, proposals false.
@@ -292,6 +295,7 @@ def test_a_declared_fallback_is_used_and_one_that_is_not_safe_is_refused(tmp_pat
 @settings(max_examples=10, deadline=None,
           suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
 @given(text=requirement_sets(), run=faulty_runs(length=40))
+@pytest.mark.tor("TOR-SHD-003", "TOR-SHD-004")
 def test_the_c_form_is_all_or_nothing_as_the_python_form(text, run):
     """The faulty runs a double can carry (NaN inputs; NaN and infinite proposals), each
     judged by :func:`judged`; the C runner gives the Python form's outputs, override, reasons

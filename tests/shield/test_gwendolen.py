@@ -49,6 +49,7 @@ def docs_forms(tmp_path_factory) -> Path:
     return write_docs_forms(tmp_path_factory.mktemp("gwendolen"))
 
 
+@pytest.mark.tor("TOR-SHD-006")
 def test_the_agent_decides_each_tick_with_the_shields_machine(docs_forms):
     gwen = (docs_forms / "safe_ros.gwen").read_text(encoding="utf-8")
     assert ":name: agilex_agent" in gwen
@@ -172,6 +173,7 @@ def python_steps(folder: Path, runs: list[list[tuple[dict, dict]]]
     return lines, want
 
 
+@pytest.mark.tor("TOR-SHD-006")
 def test_the_java_machine_holds_and_releases_the_stop_as_the_python_form(docs_forms, tmp_path):
     """Differential: 200 seeded random runs of 60 ticks through both forms, every tick's
     decided output atoms, next state and broken flag equal. The runs hold stops and release

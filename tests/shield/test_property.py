@@ -9,6 +9,7 @@ from __future__ import annotations
 import tempfile
 from pathlib import Path
 
+import pytest
 from hypothesis import HealthCheck, assume, event, given, settings
 from hypothesis import strategies as st
 
@@ -42,6 +43,7 @@ def _shield(text: str, prefer_seed: int = 0):
 
 @SETTINGS
 @given(text=requirement_sets(), run=runs(), prefer_seed=st.integers(0, 7))
+@pytest.mark.tor("TOR-SHD-001")
 def test_a_shield_keeps_its_requirements_and_interferes_least(text, run, prefer_seed):
     compiled, shield = _shield(text, prefer_seed)
     enforced = {r.id for r in shield.requirements}
@@ -75,6 +77,7 @@ def test_a_shield_keeps_its_requirements_and_interferes_least(text, run, prefer_
 @settings(max_examples=25, deadline=None,
           suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
 @given(text=requirement_sets())
+@pytest.mark.tor("TOR-SHD-001", "TOR-SHD-002")
 def test_the_closed_loop_of_every_shield_is_proved(text):
     compiled, shield = _shield(text)
     proof = prove_shield(shield, compiled)

@@ -117,6 +117,7 @@ DAMAGES = {
 
 
 @pytest.mark.parametrize("damage", sorted(DAMAGES))
+@pytest.mark.tor("TOR-SHD-007")
 def test_a_damaged_recording_is_replayed_up_to_the_damage(shield_dir, intact, tmp_path,
                                                           damage):
     check_damaged(shield_dir, intact, tmp_path, DAMAGES[damage](TRACE.read_bytes()))
@@ -204,6 +205,7 @@ def test_a_recording_of_which_nothing_can_be_read_exits_2_and_writes_nothing(shi
     assert list((tmp_path / "out").iterdir()) == []
 
 
+@pytest.mark.tor("TOR-SHD-007")
 def test_the_shielded_recording_carries_the_damage_for_a_later_audit(shield_dir, tmp_path):
     """``fretc audit`` of the written shielded recording, alone, is partial at the damage
     too (the gap is carried in the file, as a watch's recording carries its own)."""

@@ -107,6 +107,7 @@ def _drive(folder: Path, pkg: str, steps: list) -> list[dict]:
 SCAN = ["scan", "/scan", {"range_min": 0.1, "range_max": 10.0, "r": 3.0}]
 
 
+@pytest.mark.tor("TOR-SHD-005")
 def test_the_safe_ros_node_survives_an_infinite_or_nan_proposal_and_stops(tmp_path):
     folder = _package(tmp_path, REPO / "requirements" / "safe_ros.fret",
                       REPO / "requirements" / "safe_ros.bindings.toml",
@@ -127,6 +128,7 @@ def test_the_safe_ros_node_survives_an_infinite_or_nan_proposal_and_stops(tmp_pa
     assert ("/cmd_vel_filtered", 0.2) in out[6]["sent"] and out[6]["diag"][0] in (ok, warn)
 
 
+@pytest.mark.tor("TOR-SHD-005")
 def test_a_node_whose_float64_input_is_nan_publishes_the_fallback_and_goes_on(tmp_path):
     reqs = tmp_path / "near.fret"
     reqs.write_text("@tick_period 100 ms\n"

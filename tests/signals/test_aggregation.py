@@ -59,6 +59,7 @@ def _same(g, w) -> bool:
                   min_size=1, max_size=30),
        t_times=st.lists(st.integers(0, 1500), min_size=1, max_size=12),
        period=st.integers(20, 300), per_topic=st.booleans())
+@pytest.mark.tor("TOR-BND-005")
 def test_both_clocks_fold_the_messages_since_the_previous_tick(tmp_path_factory, a, t_times,
                                                                period, per_topic):
     msgs = [("/a", "std_msgs/msg/Float64", t * MS, float64(x)) for t, x in a]
@@ -147,6 +148,7 @@ def test_aggregations_are_whole_bindings_of_one_topic(expr, where):
         compile_expression("v", expr)
 
 
+@pytest.mark.tor("TOR-BND-005")
 def test_a_boolean_that_skipped_a_change_says_so(tmp_path):
     msgs = [("/v", "std_msgs/msg/Float64", S + i * S // 10, float64(1.0)) for i in range(20)]
     msgs += [("/v", "std_msgs/msg/Float64", S + 5 * S // 10 + 1000, float64(9.0)),

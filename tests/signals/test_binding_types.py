@@ -72,6 +72,7 @@ def test_dunder_fields_are_rejected_when_the_binding_is_parsed():
         compile_expression("x", "/scan.__class__.__name__ > 0")
 
 
+@pytest.mark.tor("TOR-BND-001")
 def test_a_misspelt_field_lists_the_fields_and_suggests_the_closest():
     v = _audit(["stopped=abs(/cmd_vel_filtered.linear.xx) < 1e-3"])
     e = v["R1"].error

@@ -67,6 +67,7 @@ def test_load_bindings_file(tmp_path):
     assert (too_close.line, too_close.col) == (7, 14)  # first char inside the quotes
 
 
+@pytest.mark.tor("TOR-TCK-005", "TOR-TCK-008")
 def test_tick_topic_header_time_and_lag():
     b = parse_bindings('[tick]\ntopic = "/scan"\ntime = "header"\nheader_lag = "250 ms"\n[variables]\nx = "/scan.range_max > 1"\n')
     assert b.tick == TickSpec(topic="/scan") and b.time_base == "header"
@@ -303,6 +304,7 @@ def test_laserscan_negative_infinity_is_a_too_close_return():
     assert ev("/scan.ranges[1]", m) == -math.inf  # indexing stays raw
 
 
+@pytest.mark.tor("TOR-BND-002")
 def test_laserscan_with_no_valid_return():
     """No valid return and invalid measurements (REP 117: NaN, 0.01 and 50.0 outside the
     limits): ``min`` is unknown (NaN), and ``min(...) < 0.9`` neither true nor false; it was

@@ -100,6 +100,7 @@ _times = st.lists(st.integers(0, 3_000), min_size=1, max_size=25, unique=True).m
 @settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
 @given(a=_times, b=_times, period=st.sampled_from([1, 7, 100, 250, 1000]),
        agg=st.booleans())
+@pytest.mark.tor("TOR-TCK-002")
 def test_every_sampler_ends_the_grid_at_or_after_the_last_message(tmp_path, a, b, period, agg):
     ms = [("/x", F64, t * MS, float64(t)) for t in a] + [("/y", F64, t * MS, float64(t))
                                                           for t in b]
@@ -146,6 +147,7 @@ def _fixture_logs() -> list[Path]:
 
 
 @pytest.mark.parametrize("log", _fixture_logs(), ids=lambda p: p.name)
+@pytest.mark.tor("TOR-TCK-002", "TOR-WCH-001")
 def test_audit_watch_clock_and_csv_share_the_last_tick(tmp_path, log):
     """Metamorphic: on every shipped run, each Safe-ROS requirement's clock in the audit
     has the ticks of the watch's tick-by-tick clock on the same messages; the last tick is
@@ -172,6 +174,7 @@ def test_audit_watch_clock_and_csv_share_the_last_tick(tmp_path, log):
 
 
 
+@pytest.mark.tor("TOR-TCK-006")
 def test_a_topic_silent_to_the_end_of_the_log_is_stale_there(tmp_path):
     """/scan stops at 2.9 s of a 10 s log (/other goes on): a requirement over age(/scan)
     alone ticks to the log's end and is violated from 3.3 s (age over 0.3 s); it was

@@ -43,6 +43,7 @@ def _audit(tmp_path: Path, frames, reqs: str, bindings: str) -> tuple[int, dict]
     return got.exit_code, {v["requirement"]: v["verdict"] for v in doc["logs"][0]["verdicts"]}
 
 
+@pytest.mark.tor("TOR-BND-002")
 def test_a_blind_lidar_is_never_judged_a_clear_path(tmp_path):
     """Ten good scans at 3 m, then ten of every beam NaN: ``always !too_close`` was
     satisfied (min of no valid return +inf); now unknown, exit 3 (never 0)."""

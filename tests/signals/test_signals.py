@@ -59,6 +59,7 @@ def _equal_paths(src, bindings):
     return ticks, arr
 
 
+@pytest.mark.tor("TOR-TCK-002", "TOR-TCK-003", "TOR-TCK-004")
 def test_fixed_period_sample_and_hold_with_warmup(tmp_path):
     src = open_log(_ab_log(tmp_path))
     b = make_bindings(AB, TickSpec(period_ns=100 * MS))
@@ -163,6 +164,7 @@ def _stamped_log(tmp_path):
     return write_mcap(tmp_path / "stamped.mcap", msgs)
 
 
+@pytest.mark.tor("TOR-TCK-008")
 def test_header_time_base_reorders_and_reports(tmp_path):
     src = open_log(_stamped_log(tmp_path))
     b = parse_bindings('[tick]\ntopic = "/cmd"\ntime = "header"\nheader_lag = "100 ms"\n'

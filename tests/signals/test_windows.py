@@ -72,6 +72,7 @@ def _reference(a, times, span_ms, frame_fn, **kw):
                   min_size=1, max_size=60),
        t_times=st.lists(st.integers(0, 3000), min_size=1, max_size=20),
        span=st.integers(1, 1500), period=st.integers(20, 300), per_topic=st.booleans())
+@pytest.mark.tor("TOR-BND-004")
 def test_time_windows_equal_pandas_rolling(tmp_path_factory, a, t_times, span, period,
                                            per_topic):
     a = [(t, round(x, 3)) for t, x in a]
@@ -104,6 +105,7 @@ def test_time_windows_equal_pandas_rolling(tmp_path_factory, a, t_times, span, p
                   min_size=1, max_size=60),
        t_times=st.lists(st.integers(0, 3000), min_size=1, max_size=20),
        n=st.integers(1, 12), period=st.integers(20, 300))
+@pytest.mark.tor("TOR-BND-004")
 def test_windows_of_a_count_of_messages_equal_pandas_rolling(tmp_path_factory, a, t_times, n,
                                                              period):
     a = [(t, round(x, 3)) for t, x in a]

@@ -1,0 +1,94 @@
+"""``fretc qualify -o DIR`` as a user runs it: the installed command in a process of its own,
+passing on this installation and writing its report in DIR alone; failing, and naming the
+requirement, on an installation with a seeded fault (``FRETC_QUALIFY_SEED_FAULT``); refusing
+a bad DIR before writing anything."""
+
+from __future__ import annotations
+
+import importlib.metadata
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+import fretc
+
+
+def qualify(args: list[str], home: Path, **env: str) -> subprocess.CompletedProcess:
+    """``python -m fretc qualify ARGS`` with ``home`` as its home folder (and no XDG
+    folders), so that anything it writes outside its report folder shows there."""
+    base = {k: v for k, v in os.environ.items()
+            if not k.startswith(("XDG_", "FRETC_"))}
+    base.update(HOME=str(home), **env)
+    return subprocess.run([sys.executable, "-m", "fretc", "qualify", *args], env=base,
+                          capture_output=True, text=True, timeout=600)
+
+
+def _files(folder: Path) -> list[Path]:
+    return sorted(p for p in folder.rglob("*") if p.is_file())
+
+
+@pytest.mark.tor("TOR-QUA-001")
+def test_qualify_passes_on_this_installation_and_writes_only_its_folder(tmp_path: Path):
+    home = tmp_path / "home"
+    home.mkdir()
+    got = qualify(["-o", str(tmp_path / "kit")], home)
+    assert got.returncode == 0, got.stdout + got.stderr
+    assert _files(home) == []  # no cache, no state, nothing outside the report's folder
+    doc = json.loads((tmp_path / "kit" / "report.json").read_text(encoding="utf-8"))
+    assert doc["result"] == "passed" and doc["failed_requirements"] == []
+    assert doc["environment"]["fretc"]["version"] == importlib.metadata.version("fretc")
+    dists = {d["name"].lower(): d for d in doc["environment"]["distributions"]}
+    assert dists["click"]["required"] and len(dists["click"]["sha256"]) == 64
+    results = {r["id"]: r["result"] for r in doc["requirements"]}
+    assert results["TOR-SEM-006"] == results["TOR-TCK-003"] == "passed"
+    assert set(results.values()) == {"passed", "not checked here"}
+    # the mutation run: a fault in the semantics, the tick rules and a reader, each detected
+    mutants = {m["fault"]: m for m in doc["mutants"]}
+    assert {"semantics-trigger", "tick-hold", "reader-csv"} <= set(mutants)
+    assert all(m["killed"] and m["killed_by"] for m in mutants.values())
+    page = (tmp_path / "kit" / "report.html").read_text(encoding="utf-8")
+    assert "fretc qualification report: passed" in page and "TOR-SEM-006" in page
+
+
+@pytest.mark.tor("TOR-QUA-001")
+@pytest.mark.parametrize("fault, requirement", [("tick-hold", "TOR-TCK-003"),
+                                                ("reader-csv", "TOR-VER-001")])
+def test_qualify_fails_naming_the_requirement_a_seeded_fault_breaks(tmp_path: Path, fault,
+                                                                     requirement):
+    home = tmp_path / "home"
+    home.mkdir()
+    got = qualify(["-o", str(tmp_path / "kit"), "--no-mutation"], home,
+                  FRETC_QUALIFY_SEED_FAULT=fault)
+    assert got.returncode == 1, got.stdout + got.stderr
+    assert f"FAILED {requirement}:" in got.stderr
+    doc = json.loads((tmp_path / "kit" / "report.json").read_text(encoding="utf-8"))
+    assert doc["result"] == "failed" and doc["seeded_fault"] == fault
+    assert requirement in doc["failed_requirements"]
+
+
+@pytest.mark.tor("TOR-QUA-001")
+def test_a_bad_output_folder_is_refused_before_anything_is_written(tmp_path: Path):
+    from click.testing import CliRunner
+
+    from fretc.cli import main
+
+    runner = CliRunner()
+    a_file = tmp_path / "report.json"
+    a_file.write_text("{}")
+    full = tmp_path / "full"
+    full.mkdir()
+    (full / "notes.txt").write_text("mine")
+    package = Path(fretc.__file__).parent
+    for target, words in ((a_file, "not a folder"), (full, "not empty"),
+                          (package / "compiler" / "qualify-out", "inside the installed fretc")):
+        got = runner.invoke(main, ["qualify", "-o", str(target)])
+        assert got.exit_code == 2 and words in got.output, got.output
+    assert not (package / "compiler" / "qualify-out").exists()
+    assert a_file.read_text() == "{}" and _files(full) == [full / "notes.txt"]
+    got = runner.invoke(main, ["qualify", "-o", str(tmp_path / "new")],
+                        env={"FRETC_QUALIFY_SEED_FAULT": "no-such-fault"})
+    assert got.exit_code == 2 and "tick-hold" in got.output and not (tmp_path / "new").exists()
