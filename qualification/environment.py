@@ -5,7 +5,9 @@ installed distribution with its version and a hash of its installed files' recor
 The hash of a distribution is the SHA-256 of its ``RECORD`` file (the list of its installed
 files, each with its own SHA-256: PEP 376 and the wheel specification), else of its
 ``METADATA``: two installations of one version built the same way hash the same, and a file
-changed after installation by a tool that rewrites the record shows as another hash. Nothing
+changed after installation by a tool that rewrites the record shows as another hash. fretc's
+own files are hashed too, as they are on disk (:func:`package_hash`: an editable install's
+record lists none of them). Nothing
 here runs a program (no ``git``, no ``pip``); the commit is read from the files of the
 source tree an editable or local install points at (PEP 610's ``direct_url.json``).
 """
@@ -53,17 +55,42 @@ def _git_head(folder: Path) -> str | None:
     return None
 
 
+def package_hash() -> tuple[str, int]:
+    """(SHA-256 hex, number of files) of the installed fretc package's files as they are on
+    disk: every file under its folder and its sub-packages' folders (links followed, as
+    Python imports them; ``__pycache__`` left out), each as its path relative to the package
+    and its bytes, in sorted order."""
+    import importlib.resources
+    import os
+
+    root = Path(str(importlib.resources.files("fretc")))
+    digest = hashlib.sha256()
+    files = []
+    for here, dirs, names in os.walk(root, followlinks=True):
+        dirs[:] = sorted(d for d in dirs if d != "__pycache__")
+        files += [Path(here) / n for n in names if not n.endswith((".pyc", ".pyo"))]
+    for path in sorted(files, key=lambda p: p.relative_to(root).as_posix()):
+        rel = path.relative_to(root).as_posix().encode("utf-8")
+        digest.update(len(rel).to_bytes(4, "big") + rel)
+        data = path.read_bytes()
+        digest.update(len(data).to_bytes(8, "big") + data)
+    return digest.hexdigest(), len(files)
+
+
 def fretc_origin() -> dict[str, Any]:
-    """``{"version", "commit", "source"}`` of the installed fretc: its version, the commit
-    (a VCS install's ``commit_id``, else the HEAD of the local source tree it was installed
-    from, else None) and that source's URL (None when it was installed from an index)."""
+    """``{"version", "commit", "source", "files_sha256", "files"}`` of the installed fretc:
+    its version, the commit (a VCS install's ``commit_id``, else the HEAD of the local source
+    tree it was installed from, else None), that source's URL (None when it was installed
+    from an index) and the hash and count of its package's files (:func:`package_hash`)."""
     dist = metadata.distribution("fretc")
     url = _direct_url(dist)
     commit = (url.get("vcs_info") or {}).get("commit_id")
     source = url.get("url")
     if commit is None and isinstance(source, str) and source.startswith("file://"):
         commit = _git_head(Path(unquote(urlparse(source).path)))
-    return {"version": dist.version, "commit": commit, "source": source}
+    files_sha256, count = package_hash()
+    return {"version": dist.version, "commit": commit, "source": source,
+            "files_sha256": files_sha256, "files": count}
 
 
 def _hash(dist: metadata.Distribution) -> tuple[str | None, str]:

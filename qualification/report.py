@@ -60,8 +60,10 @@ def html_page(doc: dict[str, Any]) -> str:
         "collapse;margin:1em 0}td,th{border:1px solid #999;padding:2px 6px;text-align:left;"
         "vertical-align:top}.failed{color:#b00}</style></head><body>",
         f"<h1>fretc qualification report: {_e(doc['result'])}</h1>",
-        _table(["fretc", "commit", "Python", "platform", "date", "seeded fault"],
-               [[fretc["version"], fretc["commit"], env["python"]["version"],
+        _table(["fretc", "commit", "package files (sha256)", "Python", "platform", "date",
+                "seeded fault"],
+               [[fretc["version"], fretc["commit"], f"{fretc['files_sha256']} "
+                 f"({fretc['files']} files)", env["python"]["version"],
                  env["platform"]["platform"], doc["date"], doc["seeded_fault"]]]),
     ]
     if doc["failed_requirements"]:

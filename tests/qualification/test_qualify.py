@@ -40,7 +40,9 @@ def test_qualify_passes_on_this_installation_and_writes_only_its_folder(tmp_path
     assert _files(home) == []  # no cache, no state, nothing outside the report's folder
     doc = json.loads((tmp_path / "kit" / "report.json").read_text(encoding="utf-8"))
     assert doc["result"] == "passed" and doc["failed_requirements"] == []
-    assert doc["environment"]["fretc"]["version"] == importlib.metadata.version("fretc")
+    origin = doc["environment"]["fretc"]
+    assert origin["version"] == importlib.metadata.version("fretc")
+    assert len(origin["files_sha256"]) == 64 and origin["files"] > 300
     dists = {d["name"].lower(): d for d in doc["environment"]["distributions"]}
     assert dists["click"]["required"] and len(dists["click"]["sha256"]) == 64
     results = {r["id"]: r["result"] for r in doc["requirements"]}
@@ -68,6 +70,27 @@ def test_qualify_fails_naming_the_requirement_a_seeded_fault_breaks(tmp_path: Pa
     doc = json.loads((tmp_path / "kit" / "report.json").read_text(encoding="utf-8"))
     assert doc["result"] == "failed" and doc["seeded_fault"] == fault
     assert requirement in doc["failed_requirements"]
+
+
+def test_the_package_hash_follows_the_files_and_not_the_bytecode(tmp_path: Path, monkeypatch):
+    import importlib.resources
+
+    from fretc.qualification import environment
+
+    (tmp_path / "sub").mkdir()
+    (tmp_path / "a.py").write_text("x = 1\n")
+    (tmp_path / "sub" / "b.toml").write_text("k = 2\n")
+    monkeypatch.setattr(importlib.resources, "files", lambda name: tmp_path)
+    first = environment.package_hash()
+    assert first[1] == 2
+    (tmp_path / "__pycache__").mkdir()
+    (tmp_path / "__pycache__" / "a.cpython-311.pyc").write_bytes(b"\0")
+    assert environment.package_hash() == first
+    (tmp_path / "sub" / "b.toml").write_text("k = 3\n")
+    assert environment.package_hash()[0] != first[0]
+    (tmp_path / "sub" / "b.toml").write_text("k = 2\n")
+    (tmp_path / "sub" / "b.toml").rename(tmp_path / "b.toml")  # the same bytes elsewhere
+    assert environment.package_hash()[0] != first[0]
 
 
 @pytest.mark.tor("TOR-QUA-001")
