@@ -11,13 +11,16 @@ variable's ``assignment`` (a Lustre expression defining it) and a Mode's
 (``modeldoc: true``, ``portType``): those are no FRET variables and are skipped.
 
 fretc takes a component's Input and Output variables as the ``@inputs``/``@outputs`` of its
-requirements (``fretc check``'s realizability, ``fretc shield``). What it does not take
-(an Internal variable's assignment: fretc reads the variable as a free one; a Mode's
-requirement; an integer type, the numbers being reals) is named by :func:`unused`, never
-silently dropped. An Internal variable whose assignment is a literal (FRET's case studies:
-``ap_standby_state`` is ``3.0``) is that constant for the analyses that FRET makes with the
-assignments (realizability: ``fretc check``, ``fretc shield``; :func:`with_fret_constants`);
-the formulas fretc emits keep the variable's name, as FRET's ft and pt do.
+requirements (``fretc check``'s realizability, ``fretc shield``). An Internal variable is its
+definition, as FRET's realizability reads it, for the analyses (``fretc check``, ``fretc
+shield``, ``fretc testgen``; :func:`with_fret_constants`): a literal (FRET's case studies:
+``ap_standby_state`` is ``3.0``) is that constant, a Lustre expression
+(``roll_hold`` is ``autopilot_engaged and not hdg_hold``, ``0.0 -> pre xin``) its FRETish
+reading with the Internal variables it reads expanded (:mod:`fretc.fretish.lustre`,
+:mod:`fretc.fretish.fret_definitions`); the formulas fretc emits keep the variable's name,
+as FRET's ft and pt do. What it does not take (a definition that reads itself through
+``pre`` or is outside the subset: a free variable; a Mode's requirement; an integer type,
+the numbers being reals) is named by :func:`unused`, never silently dropped.
 """
 
 from __future__ import annotations
@@ -120,29 +123,24 @@ def constant_of(v: FretVariable) -> A.Expr | None:
 
 def with_fret_constants(entry: Any) -> Any:
     """``entry`` (:class:`fretc.fretish.entry.RequirementEntry`) with each Internal variable
-    of its FRET export whose assignment is a literal replaced by that literal in its
-    requirement's expressions (conditions, response, stop condition, a scope's condition;
-    not a scope's mode name); the entry itself when there is none."""
-    values = {v.name: c for v in entry.variables if (c := constant_of(v)) is not None}
+    of its FRET export that FRET defines replaced by its definition in its requirement's
+    expressions (conditions, response, stop condition, a scope's condition or mode): a
+    literal by that constant, a Lustre expression by its FRETish reading with the Internal
+    variables it reads expanded (:mod:`fretc.fretish.fret_definitions`); those fretc keeps
+    free stay variables. The entry itself when there is none."""
+    from fretc.fretish.fret_definitions import definitions, substitute
+
+    values = definitions(tuple(entry.variables)).values
     req = entry.requirement
     if not values or req is None or req.freeform:
         return entry
 
     def sub(e: Any) -> Any:
-        if e is None:
-            return None
-        if isinstance(e, A.Var):
-            return values.get(e.name, e)
-        if isinstance(e, A.Unary):
-            return dataclasses.replace(e, operand=sub(e.operand))
-        if isinstance(e, A.Binary):
-            return dataclasses.replace(e, left=sub(e.left), right=sub(e.right))
-        if isinstance(e, A.Call):
-            return dataclasses.replace(e, args=tuple(sub(a) for a in e.args))
-        return e
+        return substitute(e, lambda v: values.get(v.name, v))
 
     scope = req.scope
-    if scope.mode is not None and not isinstance(scope.mode, A.Var):
+    if scope.mode is not None and not (isinstance(scope.mode, A.Var) and isinstance(
+            values.get(scope.mode.name), A.NumLit)):  # (a mode named by a number: kept)
         scope = dataclasses.replace(scope, mode=sub(scope.mode))
     cond = dataclasses.replace(req.condition, expr=sub(req.condition.expr), parts=tuple(
         dataclasses.replace(p, expr=sub(p.expr)) for p in req.condition.parts))
@@ -167,18 +165,25 @@ def names_read(entries: Any) -> set[str]:
 
 def unused(variables: list[FretVariable] | tuple[FretVariable, ...], read: set[str],
            whole: Collection[str] = ()) -> list[str]:
-    """What the FRET declarations of the variables in ``read`` say that fretc does not use
-    (a literal Internal assignment is used: :func:`with_fret_constants`), one sentence per
-    variable (sorted by name); ``whole``: the variables the shield gives whole numbers (its
-    outputs declared ``integer``), whose type is used."""
+    """What the FRET declarations of the variables in ``read`` say, and how fretc reads
+    it, one sentence per variable (sorted by name): an Internal variable's definition used
+    (:func:`with_fret_constants`) or why it is not (then a free variable), a Mode or Function
+    read as a free variable, an integer type; ``whole``: the variables the shield gives
+    whole numbers (its outputs declared ``integer``), whose type is used. ``read`` is
+    closed over the definitions: a variable an expanded definition reads is read."""
+    from fretc.fretish.fret_definitions import definitions
+
+    defs = definitions(tuple(variables))
+    read = _through_definitions(read, defs.values)
     out = []
     for v in sorted((v for v in variables if v.name in read), key=lambda v: v.name):
-        if constant_of(v) is not None:
-            out.append(f"{v.name}: FRET defines it (Internal) as {v.assignment.strip()}; "
-                       "that constant in the analysis (the emitted formulas keep its name)")
+        if v.kind == "Internal" and v.name in defs.values:
+            what = "constant" if constant_of(v) is not None else "definition"
+            out.append(f"{v.name}: FRET defines it (Internal) as {_short(v.assignment)}; "
+                       f"that {what} in the analysis (the emitted formulas keep its name)")
         elif v.kind == "Internal" and v.assignment.strip():
-            out.append(f"{v.name}: FRET defines it (Internal) as {v.assignment.strip()}; "
-                       "fretc reads it as a free variable")
+            out.append(f"{v.name}: FRET defines it (Internal) as {_short(v.assignment)}; "
+                       f"fretc reads it as a free variable: {defs.free.get(v.name, '')}")
         elif v.kind in ("Mode", "Function"):
             out.append(f"{v.name}: declared a {v.kind} in FRET; fretc reads it as a free "
                        "variable")
@@ -187,6 +192,26 @@ def unused(variables: list[FretVariable] | tuple[FretVariable, ...], read: set[s
                        + ("the shield gives it whole numbers" if v.name in whole
                           else "fretc's numbers are reals"))
     return out
+
+
+def _through_definitions(read: set[str], values: dict[str, A.Expr]) -> set[str]:
+    """``read`` with every variable the definitions of its members read, transitively."""
+    out, todo = set(read), list(read)
+    while todo:
+        e = values.get(todo.pop())
+        if e is None:
+            continue
+        for n in A.walk(e):
+            if isinstance(n, A.Var) and n.name not in out:
+                out.add(n.name)
+                todo.append(n.name)
+    return out
+
+
+def _short(text: str, limit: int = 160) -> str:
+    """An assignment for a note: its white space folded, at most ``limit`` characters."""
+    one = " ".join(text.split())
+    return one if len(one) <= limit else one[:limit - 3] + "..."
 
 
 def fret_declarations(entries: list, whole: Collection[str] = ()

@@ -1,0 +1,146 @@
+"""The definitions of a FRET glossary's Internal variables, expanded for the analyses.
+
+FRET reads an Internal variable as its definition (its ``assignment``, in FRET's Lustre
+subset: :mod:`fretc.fretish.lustre`) when it checks realizability, so a requirement reading
+``roll_hold`` is about ``autopilot_engaged and not hdg_hold``. :func:`definitions` gives, for
+one component's variables, each Internal variable's expression with the Internal variables
+it reads replaced by theirs (a literal is that constant), and, for each one fretc keeps as a
+free variable, why: a definition outside the subset, or one that reads itself (through
+``pre``: ``psiAtZero`` is ``Psi -> if ... then Psi else pre psiAtZero``, a stream with state
+that no expression of the variables' present and past values without it writes), or that
+reads such a variable. The expansions are what ``fretc check``, ``fretc shield`` and ``fretc
+testgen`` analyse (:func:`fretc.fretish.fret_variables.with_fret_constants`); the formulas
+fretc prints keep the variable's name, as FRET's ft and pt do.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import functools
+from dataclasses import dataclass
+from typing import Any
+
+from fretc.fretish import ast as A
+from fretc.fretish.lustre import LustreError, parse_definition
+
+__all__ = ["Definitions", "definitions", "substitute", "MAX_EXPANSION_NODES"]
+
+#: An expansion past this many expression nodes is not made (the variable stays free, the
+#: notes say so): a definition that reads a definition that reads ... can grow each time.
+MAX_EXPANSION_NODES = 2000
+
+
+@dataclass(frozen=True)
+class Definitions:
+    """``values``: Internal variable -> its expanded expression (constants included);
+    ``free``: Internal variable with an assignment fretc does not expand -> why (one
+    clause); ``texts``: variable -> its assignment as FRET wrote it."""
+
+    values: dict[str, A.Expr]
+    free: dict[str, str]
+    texts: dict[str, str]
+
+
+@functools.lru_cache(maxsize=256)
+def definitions(variables: tuple[Any, ...]) -> Definitions:
+    """The :class:`Definitions` of one component's FRET variables (a tuple of
+    :class:`fretc.fretish.fret_variables.FretVariable`; those that are not Internal or have
+    no assignment are not definitions). Deterministic; memoized by the tuple."""
+    from fretc.fretish.fret_variables import constant_of
+
+    kinds = {v.name: v for v in variables}
+
+    def is_boolean(name: str) -> bool:
+        v = kinds.get(name)
+        return v is not None and v.data_type == "boolean"
+
+    raw: dict[str, A.Expr] = {}
+    free: dict[str, str] = {}
+    texts = {v.name: v.assignment.strip() for v in variables
+             if v.kind == "Internal" and v.assignment.strip()}
+    for v in variables:
+        if v.name not in texts:
+            continue
+        literal = constant_of(v)
+        if literal is not None:
+            raw[v.name] = literal
+            continue
+        try:
+            raw[v.name] = parse_definition(texts[v.name], is_boolean)
+        except LustreError as exc:
+            free[v.name] = f"its definition is outside FRET's Lustre subset that fretc reads ({exc})"
+    values: dict[str, A.Expr] = {}
+    for name in sorted(raw):
+        _expand(name, raw, values, free, ())
+    return Definitions(values, free, texts)
+
+
+def _expand(name: str, raw: dict[str, A.Expr], values: dict[str, A.Expr],
+            free: dict[str, str], stack: tuple[str, ...]) -> A.Expr | None:
+    """The expansion of ``name`` (memoized in ``values``), None when it stays free (the
+    reason recorded in ``free``)."""
+    if name in values:
+        return values[name]
+    if name in free:
+        return None
+    if name in stack:
+        for n in stack[stack.index(name):]:
+            free.setdefault(n, "its definition reads itself (a stream with state, through "
+                               "pre): no expression of the other variables is it")
+        return None
+    blocked: list[str] = []
+
+    def var(v: A.Var) -> A.Expr:
+        if v.name not in raw:
+            return v
+        got = _expand(v.name, raw, values, free, (*stack, name))
+        if got is None:
+            blocked.append(v.name)
+            return v
+        return got
+
+    out = substitute(raw[name], var)
+    if name in free:  # (found on a cycle through it)
+        return None
+    if blocked:
+        free[name] = ("it reads " + ", ".join(sorted(set(blocked)))
+                      + ", which fretc keeps free")
+        return None
+    if _size(out) > MAX_EXPANSION_NODES:
+        free[name] = f"its expansion has more than {MAX_EXPANSION_NODES} nodes"
+        return None
+    values[name] = out
+    return out
+
+
+def substitute(e: Any, var: Any) -> Any:
+    """``e`` (an expression of :mod:`fretc.fretish.ast`, or None) with each variable ``v``
+    replaced by ``var(v)`` (iteratively over nested operands would need a stack per node
+    kind; definitions nest to Lustre's depth only, which the reader has bounded)."""
+    if e is None:
+        return None
+    if isinstance(e, A.Var):
+        return var(e)
+    if isinstance(e, A.Unary):
+        return dataclasses.replace(e, operand=substitute(e.operand, var))
+    if isinstance(e, A.Binary):
+        return dataclasses.replace(e, left=substitute(e.left, var),
+                                   right=substitute(e.right, var))
+    if isinstance(e, A.Call):
+        return dataclasses.replace(e, args=tuple(substitute(a, var) for a in e.args))
+    return e
+
+
+def _size(e: Any) -> int:
+    """The number of nodes of the expression ``e``."""
+    n, stack = 0, [e]
+    while stack:
+        x = stack.pop()
+        n += 1
+        if isinstance(x, A.Unary):
+            stack.append(x.operand)
+        elif isinstance(x, A.Binary):
+            stack += [x.left, x.right]
+        elif isinstance(x, A.Call):
+            stack += list(x.args)
+    return n

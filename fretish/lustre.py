@@ -1,0 +1,232 @@
+"""FRET's glossary definitions: the Lustre expressions of Internal variables, read as FRETish
+expressions.
+
+FRET's Analysis Portal defines an Internal variable by an expression in a subset of Lustre
+(its ``assignment``: ``roll_hold`` is ``autopilot_engaged and not hdg_hold``; ``xinpv`` is
+``0.0 -> pre xin``) and its realizability check reads the variable as that definition (FRET's
+manual, "Variable Mapping" and "Realizability Checking"; the Lustre of Kind 2 / CoCoSpec).
+:func:`parse_definition` reads that subset into :mod:`fretc.fretish.ast` expressions, with the
+same meaning:
+
+- ``and``, ``or``, ``xor``, ``not``, ``=>``, ``=``, ``<>``, ``<``, ``<=``, ``>``, ``>=``,
+  ``+``, ``-``, ``*``, ``/``, ``mod``, unary ``-``, ``true``/``false``, numbers, names,
+  ``f(args)`` (a function the glossary declares), parentheses;
+- ``if c then a else b`` is ``ite(c, a, b)``;
+- ``a -> b`` (``a`` at the first tick, ``b`` after) is ``ite(FTP, a, b)``, ``FTP`` being FRET's
+  first time point of the trace (a Lustre node's first instant);
+- ``pre e`` (``e`` one tick earlier) is ``preBool(false, e)`` for a boolean ``e`` and
+  ``preReal(0, e)`` for a number: FRET's functions of the previous value, whose value at
+  the first tick Lustre leaves undefined (``nil``) and a definition guards with ``->``.
+
+Precedence (Lustre V6's, lowest first): ``if``, ``->`` (right), ``=>`` (right), ``or``
+``xor``, ``and``, comparisons, ``not``, ``+ -``, ``* / mod``, unary ``-`` and ``pre``.
+``=`` and ``<>`` between truth values are ``<->`` and ``xor``. Types: a comparison, a logical
+operator and ``true``/``false`` are boolean; a name is what
+the glossary's ``dataType`` says (``boolean``, else a number); ``ite``, ``->`` and ``pre``
+take their operands'. ``div``, ``when``, ``current``, ``fby`` and the rest of Lustre are
+refused (:class:`LustreError`), so a definition fretc cannot read stays a free variable and
+the notes say so.
+"""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Callable
+
+from fretc.fretish import ast as A
+
+__all__ = ["LustreError", "parse_definition"]
+
+_TOKEN = re.compile(r"\s*(?:(?P<num>(?:[0-9]+(?:\.[0-9]*)?|\.[0-9]+)(?:[eE][-+]?[0-9]+)?)"
+                    r"|(?P<name>[A-Za-z_][A-Za-z0-9_]*)"
+                    r"|(?P<op>->|=>|<>|<=|>=|[-+*/=<>(),]))")
+_KEYWORDS = frozenset({"and", "or", "xor", "not", "if", "then", "else", "pre", "true",
+                       "false", "mod"})
+_REFUSED = frozenset({"div", "when", "current", "fby", "merge", "let", "tel", "node"})
+_COMPARISONS = {"=": "=", "<>": "!=", "<": "<", "<=": "<=", ">": ">", ">=": ">="}
+
+
+class LustreError(ValueError):
+    """A definition outside FRET's Lustre subset (the module docstring), with the reason."""
+
+
+def parse_definition(text: str, is_boolean: Callable[[str], bool]) -> A.Expr:
+    """The FRETish expression of the Lustre definition ``text`` (module docstring);
+    ``is_boolean(name)`` says whether a variable of the glossary is boolean.
+
+    Raises:
+        LustreError: a token or construct outside the subset, or a definition that does
+            not end where the expression does, naming what and where (character offset)."""
+    p = _Parser(_tokens(text), is_boolean)
+    try:
+        e = p.expr()
+    except RecursionError:
+        raise LustreError("nested too deeply") from None
+    if p.peek() is not None:
+        raise LustreError(f"unexpected {p.peek()!r} at character {p.offset()}")
+    return e
+
+
+def _tokens(text: str) -> list[tuple[str, int]]:
+    """``(token, offset)`` of ``text``. Raises :class:`LustreError` at a character no token
+    starts with."""
+    out: list[tuple[str, int]] = []
+    i = 0
+    while True:
+        while i < len(text) and text[i].isspace():
+            i += 1
+        if i == len(text):
+            return out
+        m = _TOKEN.match(text, i)
+        if m is None or m.end() == i:
+            raise LustreError(f"unexpected {text[i]!r} at character {i}")
+        tok = m.group("num") or m.group("name") or m.group("op")
+        out.append((tok, i))
+        i = m.end()
+
+
+class _Parser:
+    """Recursive descent over the tokens, one method per precedence level (lowest first);
+    each returns ``(expression, is_boolean)``, the public :meth:`expr` the expression."""
+
+    def __init__(self, tokens: list[tuple[str, int]], is_boolean: Callable[[str], bool]):
+        self.tokens, self.k, self.is_boolean = tokens, 0, is_boolean
+
+    def peek(self) -> str | None:
+        return self.tokens[self.k][0] if self.k < len(self.tokens) else None
+
+    def offset(self) -> int:
+        return self.tokens[self.k][1] if self.k < len(self.tokens) else -1
+
+    def take(self, want: str | None = None) -> str:
+        tok = self.peek()
+        if tok is None or (want is not None and tok != want):
+            raise LustreError(f"expected {want or 'an expression'} at character "
+                              f"{self.offset()}, found {tok!r}" if tok else
+                              f"expected {want or 'an expression'} at the end")
+        self.k += 1
+        return tok
+
+    def expr(self) -> A.Expr:
+        return self.ite()[0]
+
+    def ite(self) -> tuple[A.Expr, bool]:
+        """The lowest level; ``if`` itself is read where an operand starts (:meth:`atom`),
+        its ``else`` branch extending as far right as it can."""
+        return self.arrow()
+
+    def if_then_else(self) -> tuple[A.Expr, bool]:
+        self.take("if")
+        c, _ = self.ite()
+        self.take("then")
+        a, ab = self.ite()
+        self.take("else")
+        b, bb = self.ite()
+        return A.Call("ite", (c, a, b)), ab and bb
+
+    def arrow(self) -> tuple[A.Expr, bool]:
+        a, ab = self.implies()
+        if self.peek() != "->":
+            return a, ab
+        self.take("->")
+        b, bb = self.arrow()  # (right associative)
+        return A.Call("ite", (A.Var("FTP"), a, b)), ab and bb
+
+    def implies(self) -> tuple[A.Expr, bool]:
+        a, ab = self.disjunction()
+        if self.peek() != "=>":
+            return a, ab
+        self.take("=>")
+        b, _ = self.implies()
+        return A.Binary("->", a, b), True
+
+    def disjunction(self) -> tuple[A.Expr, bool]:
+        a, ab = self.conjunction()
+        while self.peek() in ("or", "xor"):
+            op = "|" if self.take() == "or" else "xor"
+            b, _ = self.conjunction()
+            a, ab = A.Binary(op, a, b), True
+        return a, ab
+
+    def conjunction(self) -> tuple[A.Expr, bool]:
+        a, ab = self.comparison()
+        while self.peek() == "and":
+            self.take()
+            b, _ = self.comparison()
+            a, ab = A.Binary("&", a, b), True
+        return a, ab
+
+    def comparison(self) -> tuple[A.Expr, bool]:
+        a, ab = self.negation()
+        if self.peek() in _COMPARISONS:
+            op = _COMPARISONS[self.take()]
+            b, bb = self.negation()
+            if ab and bb and op in ("=", "!="):  # (truth values: Lustre's = is iff)
+                op = "<->" if op == "=" else "xor"
+            return A.Binary(op, a, b), True
+        return a, ab
+
+    def negation(self) -> tuple[A.Expr, bool]:
+        if self.peek() == "not":
+            self.take()
+            a, _ = self.negation()
+            return A.Unary("!", a), True
+        return self.additive()
+
+    def additive(self) -> tuple[A.Expr, bool]:
+        a, ab = self.multiplicative()
+        while self.peek() in ("+", "-"):
+            op = self.take()
+            b, _ = self.multiplicative()
+            a, ab = A.Binary(op, a, b), False
+        return a, ab
+
+    def multiplicative(self) -> tuple[A.Expr, bool]:
+        a, ab = self.unary()
+        while self.peek() in ("*", "/", "mod"):
+            op = self.take()
+            b, _ = self.unary()
+            a, ab = A.Binary(op, a, b), False
+        return a, ab
+
+    def unary(self) -> tuple[A.Expr, bool]:
+        tok = self.peek()
+        if tok == "-":
+            self.take()
+            a, _ = self.unary()
+            if isinstance(a, A.NumLit) and not a.text.startswith("-"):
+                return A.NumLit("-" + a.text), False
+            return A.Unary("-", a), False
+        if tok == "pre":
+            self.take()
+            a, ab = self.unary()
+            if ab:
+                return A.Call("preBool", (A.BoolLit(False), a)), True
+            return A.Call("preReal", (A.NumLit("0"), a)), False
+        return self.atom()
+
+    def atom(self) -> tuple[A.Expr, bool]:
+        if self.peek() == "if":
+            return self.if_then_else()
+        at, tok = self.offset(), self.take()
+        if tok == "(":
+            e = self.ite()
+            self.take(")")
+            return e
+        if tok in ("true", "false"):
+            return A.BoolLit(tok == "true"), True
+        if tok[0].isdigit() or tok[0] == ".":
+            return A.NumLit(tok), False
+        if tok in _REFUSED:
+            raise LustreError(f"'{tok}' (character {at}) is outside FRET's Lustre subset")
+        if tok in _KEYWORDS or not (tok[0].isalpha() or tok[0] == "_"):
+            raise LustreError(f"unexpected {tok!r} at character {at}")
+        if self.peek() == "(":  # (a function the glossary declares)
+            self.take("(")
+            args = [self.expr()]
+            while self.peek() == ",":
+                self.take(",")
+                args.append(self.expr())
+            self.take(")")
+            return A.Call(tok, tuple(args)), False
+        return A.Var(tok), self.is_boolean(tok)

@@ -1,0 +1,189 @@
+"""FRET's glossary definitions (Lustre) read as FRETish expressions
+(:mod:`fretc.fretish.lustre`) and expanded for the analyses
+(:mod:`fretc.fretish.fret_definitions`).
+
+The reading is checked against a reference stream evaluator of Lustre written here (a
+definition's value at each tick of random traces, ``pre`` at the first tick taken as the
+reading's false / 0, which Lustre leaves undefined), through fretc's own pt expansion and
+reference evaluator of the IR; the expansion of definitions through each other, the
+recursive ones kept free with the reason, and ``fretc check`` on an export whose Internal
+variable is defined by its glossary."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+from click.testing import CliRunner
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from fretc.cli import main
+from fretc.compiler import ir
+from fretc.compiler.evaluate import series
+from fretc.compiler.expressions import Expander
+from fretc.fretish.fret_definitions import definitions
+from fretc.fretish.fret_variables import FretVariable
+from fretc.fretish.lustre import LustreError, parse_definition
+
+BOOLS, NUMS = ("p", "q"), ("x", "y")
+
+
+def _is_bool(name: str) -> bool:
+    return name in BOOLS
+
+
+# ------------------------------------------------------------------ a reference evaluator
+def _ref(e, trace: list[dict], t: int):
+    """The value at tick ``t`` of the Lustre term ``e`` (a tuple tree made by the strategy
+    below), on ``trace``."""
+    op = e[0]
+    if op == "var":
+        return trace[t][e[1]]
+    if op == "lit":
+        return e[1]
+    if op == "not":
+        return not _ref(e[1], trace, t)
+    if op == "neg":
+        return -_ref(e[1], trace, t)
+    if op == "pre":
+        if t == 0:
+            return False if _bool_term(e[1]) else 0.0
+        return _ref(e[1], trace, t - 1)
+    if op == "->":
+        return _ref(e[1], trace, t) if t == 0 else _ref(e[2], trace, t)
+    if op == "if":
+        return _ref(e[2], trace, t) if _ref(e[1], trace, t) else _ref(e[3], trace, t)
+    a, b = _ref(e[1], trace, t), _ref(e[2], trace, t)
+    return {"and": lambda: a and b, "or": lambda: a or b, "xor": lambda: a != b,
+            "=>": lambda: (not a) or b, "=": lambda: a == b, "<>": lambda: a != b,
+            "<": lambda: a < b, "<=": lambda: a <= b, "+": lambda: a + b,
+            "-": lambda: a - b, "*": lambda: a * b}[op]()
+
+
+def _bool_term(e) -> bool:
+    op = e[0]
+    if op == "var":
+        return e[1] in BOOLS
+    if op == "lit":
+        return isinstance(e[1], bool)
+    if op in ("pre", "neg"):
+        return _bool_term(e[1]) if op == "pre" else False
+    if op in ("->", "if"):
+        return _bool_term(e[-1])
+    return op in ("not", "and", "or", "xor", "=>", "=", "<>", "<", "<=")
+
+
+def _text(e) -> str:
+    """The Lustre text of ``e``, fully parenthesized where precedence could matter."""
+    op = e[0]
+    if op == "var":
+        return e[1]
+    if op == "lit":
+        return str(e[1]).lower() if isinstance(e[1], bool) else repr(e[1])
+    if op in ("not", "pre"):
+        return f"{op} ({_text(e[1])})"
+    if op == "neg":
+        return f"- ({_text(e[1])})"
+    if op == "if":
+        return f"(if {_text(e[1])} then {_text(e[2])} else {_text(e[3])})"
+    return f"({_text(e[1])} {op} {_text(e[2])})"
+
+
+def _terms():
+    num_leaf = st.one_of(st.sampled_from(NUMS).map(lambda n: ("var", n)),
+                         st.sampled_from([0.0, 1.0, 2.5]).map(lambda v: ("lit", v)))
+    bool_leaf = st.one_of(st.sampled_from(BOOLS).map(lambda n: ("var", n)),
+                          st.booleans().map(lambda v: ("lit", v)))
+
+    def num_ext(num):
+        return st.one_of(
+            st.tuples(st.sampled_from(["+", "-", "*"]), num, num),
+            st.tuples(st.just("neg"), num), st.tuples(st.just("pre"), num),
+            st.tuples(st.just("->"), num, num))
+    nums = st.recursive(num_leaf, num_ext, max_leaves=6)
+
+    def bool_ext(b):
+        return st.one_of(
+            st.tuples(st.sampled_from(["and", "or", "xor", "=>", "=", "<>"]), b, b),
+            st.tuples(st.just("not"), b), st.tuples(st.just("pre"), b),
+            st.tuples(st.just("->"), b, b),
+            st.tuples(st.sampled_from(["<", "<=", "=", "<>"]), nums, nums),
+            st.tuples(st.just("if"), b, b, b))
+    return st.recursive(bool_leaf, bool_ext, max_leaves=8)
+
+
+def _traces():
+    row = st.fixed_dictionaries({"p": st.booleans(), "q": st.booleans(),
+                                 "x": st.sampled_from([-1.0, 0.0, 1.0, 2.5]),
+                                 "y": st.sampled_from([0.0, 2.0, 3.0])})
+    return st.lists(row, min_size=1, max_size=6)
+
+
+@settings(max_examples=150, deadline=None)
+@given(_terms(), _traces())
+def test_a_boolean_definition_means_what_lustre_says_at_every_tick(term, trace):
+    e = parse_definition(_text(term), _is_bool)
+    node = Expander("pt", ir.FTP, ir.LAST, free=True).bool(e)
+    got = series(node, trace)
+    assert got == [bool(_ref(term, trace, t)) for t in range(len(trace))], _text(term)
+
+
+@pytest.mark.parametrize("text, why", [
+    ("x div 2", "div"), ("a +", "at the end"), ("current x", "outside"), ("a $ b", "'$'"),
+    ("if a then b", "else")])
+def test_what_is_outside_the_subset_is_refused_with_where(text, why):
+    with pytest.raises(LustreError) as err:
+        parse_definition(text, _is_bool)
+    assert why in str(err.value)
+
+
+def _var(name: str, assignment: str = "", kind: str = "Internal",
+         data_type: str = "boolean") -> FretVariable:
+    return FretVariable("c", name, kind, data_type, assignment)
+
+
+def test_definitions_expand_through_each_other_and_recursive_ones_stay_free():
+    defs = definitions((
+        _var("a", kind="Input"), _var("b", kind="Input"),
+        _var("hold", "a and not b"), _var("held", "hold or pre held"),
+        _var("twice", "hold and not pre hold"), _var("k", "3.0", data_type="double"),
+        _var("uses", "held and a"), _var("bad", "a div b")))
+    assert str(defs.values["twice"]) == str(parse_definition(
+        "(a and not b) and not pre (a and not b)", lambda n: True))
+    assert set(defs.values) == {"hold", "twice", "k"}
+    assert "reads itself" in defs.free["held"]
+    assert "reads held" in defs.free["uses"]
+    assert "outside FRET's Lustre subset" in defs.free["bad"]
+
+
+def test_check_reads_an_internal_variable_as_its_definition(tmp_path):
+    """``hold`` is Internal, ``a and not b``: realizability is decided over the Inputs a, b
+    (before, ``hold`` was a free variable declared neither input nor output: exit 2), and
+    the note says the definition is used."""
+    doc = {"requirements": [
+        {"reqid": "R1", "fulltext": "whenever hold ctrl shall immediately satisfy o"},
+        {"reqid": "R2", "fulltext": "whenever b ctrl shall immediately satisfy !o"}],
+        "variables": [
+        {"component_name": "ctrl", "variable_name": "a", "idType": "Input",
+         "dataType": "boolean"},
+        {"component_name": "ctrl", "variable_name": "b", "idType": "Input",
+         "dataType": "boolean"},
+        {"component_name": "ctrl", "variable_name": "o", "idType": "Output",
+         "dataType": "boolean"},
+        {"component_name": "ctrl", "variable_name": "hold", "idType": "Internal",
+         "dataType": "boolean", "assignment": "a and not b"}]}
+    path = tmp_path / "p.json"
+    path.write_text(json.dumps(doc), encoding="utf-8")
+    got = CliRunner().invoke(main, ["check", str(path), "--no-progress", "--json"])
+    assert got.exit_code == 0, got.output
+    res = json.loads(got.output)
+    assert res["realizability"]["undeclared"] == []
+    assert all(g["realizable"] is True for g in res["realizability"]["groups"])
+    assert any(n.startswith("hold: FRET defines it (Internal) as a and not b; that "
+                            "definition in the analysis") for n in res["notes"])
+    # with hold "a or b" the two requirements conflict whenever b: unrealizable
+    doc["variables"][3]["assignment"] = "a or b"
+    path.write_text(json.dumps(doc), encoding="utf-8")
+    got = CliRunner().invoke(main, ["check", str(path), "--no-progress", "--json"])
+    assert got.exit_code == 1 and "unrealizable" in got.output, got.output
