@@ -5,7 +5,8 @@ evaluated directly) and against truth tables written here.
 Each check is a :class:`Check`: a name, the tool operational requirements it shows (ids of
 ``requirements.toml``) and a function of a :class:`Run` returning its failures (a list of
 sentences, empty when it passes). A check never raises for a failure of fretc: an exception
-escaping it is counted as its failure (:func:`fretc.qualification.suite.run_checks`).
+escaping it is counted as its failure (:func:`fretc.qualification.suite.run_checks`), but
+:class:`CheckSkipped`, raised when the machine lacks what the check needs.
 """
 
 from __future__ import annotations
@@ -45,6 +46,11 @@ class Run:
         if name not in self._memo:
             self._memo[name] = make()
         return self._memo[name]
+
+
+class CheckSkipped(Exception):
+    """A check that cannot run on this machine (what it needs is missing: a C compiler);
+    the message says what. The requirements it shows stay unchecked here."""
 
 
 @dataclass(frozen=True)

@@ -1,9 +1,9 @@
 """The validation suite's end-to-end checks: ``fretc audit`` run as a user runs it (the
-installed command, through click in this process), on CSV traces and MCAP logs written in the
-run's work folder, its exit codes, verdicts and audit JSON compared with what FRET's
-definitions and the documentation say (:mod:`fretc.qualification.reference` for the
-verdicts; docs/guide/audits.md for exit codes, unknown ticks and damage;
-docs/guide/ticks.md for the tick rules).
+installed command, through click in this process), on CSV traces written in the run's work
+folder, its exit codes, verdicts and audit JSON compared with what FRET's definitions and
+the documentation say (:mod:`fretc.qualification.reference` for the verdicts;
+docs/guide/audits.md for exit codes and unknown ticks). The checks on MCAP logs are
+:mod:`fretc.qualification.checks_logs`'s.
 """
 
 from __future__ import annotations
@@ -18,7 +18,6 @@ from fretc.qualification.checks import SEED, Check, Run
 
 #: CSV traces of the end-to-end differential check
 E2E_TRACES = 10
-S = 1_000_000_000
 
 
 def fretc(run: Run, args: list[str]) -> tuple[int, str]:
@@ -162,82 +161,23 @@ def check_unknown(run: Run) -> list[str]:
     return out
 
 
-def _write_mcap(path: Path, messages: list[tuple[int, float]], chunk_size: int) -> None:
-    """An MCAP file of ``std_msgs/msg/Float64`` messages on ``/x`` (ROS 2 CDR, written by
-    the ``mcap`` and ``rosbags`` libraries, not by fretc): (log time in ns, value) each."""
-    from mcap.writer import Writer
-    from rosbags.typesys import Stores, get_typestore
-
-    store = get_typestore(Stores.ROS2_HUMBLE)
-    typ = "std_msgs/msg/Float64"
-    with open(path, "wb") as f:
-        w = Writer(f, chunk_size=chunk_size)
-        w.start(profile="ros2", library="fretc-qualify")
-        schema = w.register_schema(typ, "ros2msg",
-                                   store.generate_msgdef(typ, ros_version=2)[0].encode())
-        channel = w.register_channel("/x", "cdr", schema)
-        msg_type = store.types[typ]
-        for i, (time_ns, value) in enumerate(messages):
-            data = bytes(store.serialize_cdr(msg_type(data=value), typ))
-            w.add_message(channel, log_time=time_ns, data=data, publish_time=time_ns, sequence=i)
-        w.finish()
-
-
-def _mcap_audit(run: Run, name: str, messages: list[tuple[int, float]], chunk_size: int,
-                cut: float | None = None) -> tuple[int, dict[str, Any] | None, str]:
-    """Audit ``T1: the sw shall always satisfy x < 5`` (``x = /x.data``, a tick every 100
-    ms) on an MCAP log of ``messages``; ``cut``: keep only that fraction of the file."""
-    folder = run.work / name
+def check_outputs_over_inputs(run: Run) -> list[str]:
+    """An audit told to write its JSON over its own input trace is refused (exit 2, both
+    named) before anything is read or written: the trace is left as it was."""
+    folder = run.work / "outputs"
     folder.mkdir(parents=True, exist_ok=True)
-    log = folder / f"{name}.mcap"
-    _write_mcap(log, messages, chunk_size)
-    if cut is not None:
-        data = log.read_bytes()
-        log.write_bytes(data[:int(len(data) * cut)])
-    (folder / "requirements.fret").write_text("T1: the sw shall always satisfy x < 5\n",
-                                              encoding="utf-8")
-    (folder / "x.toml").write_text('[tick]\nperiod = "100 ms"\n\n[variables]\nx = "/x.data"\n',
-                                   encoding="utf-8")
-    out = folder / "audit.json"
-    code, text = fretc(run, ["audit", "-r", str(folder / "requirements.fret"), "--bindings",
-                        str(folder / "x.toml"), str(log), "--json", str(out), "--no-progress"])
-    return code, (json.loads(out.read_text("utf-8")) if out.exists() else None), text
-
-
-def check_mcap_ticks(run: Run) -> list[str]:
-    """The tick rules on an MCAP log at a 100 ms period: the grid from the first multiple
-    of the period at or after the first message to the first at or after the last; a
-    message exactly at a tick is held by that tick (sample and hold)."""
-    msgs = [(1_050_000_000, 1.0), (1_200_000_000, 9.0), (1_250_000_000, 1.0),
-            (1_350_000_000, 1.0)]
-    code, doc, text = _mcap_audit(run, "ticks", msgs, 1 << 20)
-    v = verdicts(doc).get(("ticks.mcap", "T1"), {})
-    fv = v.get("first_violation") or {}
-    got = (code, v.get("verdict"), fv.get("tick"), fv.get("tick_time_ns"),
-           v.get("first_tick_ns"), v.get("last_tick_ns"))
-    want = (1, "violated", 1, 1_200_000_000, 1_100_000_000, 1_400_000_000)
-    if got != want:
-        return [f"(exit, verdict, violation tick, its time, first tick, last tick) = {got}, "
-                f"expected {want}: {text.strip()[-200:]}"]
-    return []
-
-
-def check_mcap_damage(run: Run) -> list[str]:
-    """An MCAP log cut short (a crashed recording) is read up to the damage: the log is
-    partial, the damage listed, the exit code 3 (no violation in what was read) and no
-    verdict claims a satisfaction the lost part could break."""
-    msgs = [(S + i * 50_000_000, 1.0) for i in range(400)]
-    code, doc, text = _mcap_audit(run, "damage", msgs, 2048, cut=0.6)
-    if doc is None:
-        return [f"no audit JSON (exit {code}): {text.strip()[-200:]}"]
-    log = doc["logs"][0]
-    v = verdicts(doc).get(("damage.mcap", "T1"), {})
+    req, log = folder / "requirements.fret", folder / "t.csv"
+    req.write_text("R1: the sw shall always satisfy x <= 5\n", encoding="utf-8")
+    text = _csv({"x": [1, 2]})
+    log.write_text(text, encoding="utf-8")
+    code, output = fretc(run, ["audit", "-r", str(req), str(log), "--json", str(log),
+                               "--no-progress"])
     out = []
-    if code != 3 or not log["partial"] or not log["problems"]:
-        out.append(f"exit {code}, partial {log['partial']}, problems {len(log['problems'])}; "
-                   "expected 3, partial, the damage listed")
-    if v.get("verdict") == "satisfied" and not v.get("partial"):
-        out.append("the damaged log's verdict is satisfied without being marked partial")
+    if code != 2 or "t.csv" not in output:
+        out.append(f"--json naming the input: exit {code}, {output.strip()[-200:]!r}; "
+                   "expected 2 naming it")
+    if log.read_text(encoding="utf-8") != text:
+        out.append("the input trace was overwritten")
     return out
 
 
@@ -252,8 +192,6 @@ CHECKS: tuple[Check, ...] = (
           "verdicts, evidence, robustness and exit codes 0, 1, 2", check_verdicts_and_exit),
     Check("audit-unknown", ("TOR-VER-004", "TOR-DMG-003", "TOR-DMG-004", "TOR-VER-006"),
           "unknown cells, NaN and a cut: three-valued verdicts, exit 3", check_unknown),
-    Check("mcap-ticks", ("TOR-TCK-002", "TOR-TCK-003", "TOR-LOG-001"),
-          "the tick grid and sample and hold on an MCAP log", check_mcap_ticks),
-    Check("mcap-damage", ("TOR-DMG-001",),
-          "an MCAP log cut short: partial, damage listed, exit 3", check_mcap_damage),
+    Check("outputs-inputs", ("TOR-OUT-001",),
+          "an output naming an input is refused, the input kept", check_outputs_over_inputs),
 )

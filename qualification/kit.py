@@ -104,7 +104,10 @@ def summary_lines(q: Qualified) -> tuple[list[str], list[str]]:
     fretc_doc = q.doc["environment"]["fretc"]
     out = [f"fretc qualify: fretc {fretc_doc['version']}"
            + (f" (commit {fretc_doc['commit']})" if fretc_doc["commit"] else ""),
-           f"{len(q.outcome.checks)} checks, {sum(c.passed for c in q.outcome.checks)} passed; "
+           f"{len(q.outcome.checks)} checks, "
+           f"{sum(c.passed and c.ran for c in q.outcome.checks)} passed"
+           + "".join(f", {c.check.name} skipped ({c.skipped})" for c in q.outcome.checks
+                     if not c.ran) + "; "
            f"requirements: {count['passed']} passed, {count['failed']} failed, "
            f"{count['not checked here']} not checked here (shown by the project's tests)",
            f"mutation run: {killed} of {len(q.doc['mutants'])} seeded faults detected"

@@ -75,7 +75,7 @@ def html_page(doc: dict[str, Any]) -> str:
                        "; ".join(r["failures"])] for r in doc["requirements"]]),
               "<h2>Checks</h2>",
               _table(["check", "result", "requirements", "what", "seconds", "failures"],
-                     [[c["name"], "passed" if c["passed"] else "failed",
+                     [[c["name"], c["result"] + (f" ({c['skipped']})" if c["skipped"] else ""),
                        ", ".join(c["requirements"]), c["what"], c["seconds"],
                        "; ".join(c["failures"])] for c in doc["checks"]]),
               "<h2>Mutation run</h2>",

@@ -21,13 +21,14 @@ from pathlib import Path
 from typing import Any
 
 from fretc.qualification import checks as checks_module
-from fretc.qualification import checks_audit
+from fretc.qualification import checks_audit, checks_forms, checks_logs
 from fretc.qualification.catalogue import load_requirements
-from fretc.qualification.checks import Check, Run
+from fretc.qualification.checks import Check, CheckSkipped, Run
 from fretc.qualification.faults import FAULTS
 
 #: every check of the suite, in the order it runs
-CHECKS: tuple[Check, ...] = checks_module.CHECKS + checks_audit.CHECKS
+CHECKS: tuple[Check, ...] = (checks_module.CHECKS + checks_audit.CHECKS + checks_logs.CHECKS
+                             + checks_forms.CHECKS)
 #: the environment variable that seeds a fault for a whole run (a test's way to stand for a
 #: broken installation; its value a name of :data:`fretc.qualification.faults.FAULTS`)
 SEED_VARIABLE = "FRETC_QUALIFY_SEED_FAULT"
@@ -35,18 +36,29 @@ SEED_VARIABLE = "FRETC_QUALIFY_SEED_FAULT"
 
 @dataclass
 class CheckResult:
-    """One check's outcome: ``passed``, its ``failures`` (sentences) and ``seconds``."""
+    """One check's outcome: ``passed``, its ``failures`` (sentences), ``seconds``, and
+    ``skipped``: why it could not run here (None when it ran; a skipped check has passed
+    nothing and failed nothing)."""
 
     check: Check
     passed: bool
     failures: list[str]
     seconds: float
+    skipped: str | None = None
+
+    @property
+    def ran(self) -> bool:
+        """The check ran (it was not skipped)."""
+        return self.skipped is None
 
     def to_json(self) -> dict[str, Any]:
-        """``{"name", "what", "requirements", "passed", "failures", "seconds"}``."""
+        """``{"name", "what", "requirements", "result", "passed", "failures", "skipped",
+        "seconds"}``; ``result`` one of ``passed``, ``failed``, ``skipped``."""
+        result = "skipped" if not self.ran else "passed" if self.passed else "failed"
         return {"name": self.check.name, "what": self.check.what,
-                "requirements": list(self.check.tors), "passed": self.passed,
-                "failures": self.failures, "seconds": round(self.seconds, 3)}
+                "requirements": list(self.check.tors), "result": result,
+                "passed": self.passed, "failures": self.failures, "skipped": self.skipped,
+                "seconds": round(self.seconds, 3)}
 
 
 @dataclass
@@ -65,7 +77,7 @@ class Outcome:
         here``), ``checks`` (the names of those that show it) and ``failures``."""
         out = []
         for req in load_requirements():
-            mine = [r for r in self.checks if req.id in r.check.tors]
+            mine = [r for r in self.checks if req.id in r.check.tors and r.ran]
             failed = [r for r in mine if not r.passed]
             result = ("failed" if failed else "passed") if mine else "not checked here"
             out.append({"id": req.id, "area": req.area, "statement": req.statement,
@@ -94,11 +106,15 @@ def run_checks(run: Run, checks: Sequence[Check] = CHECKS, stop_at_failure: bool
     out = []
     for check in checks:
         start = time.perf_counter()
+        skipped = None
         try:
             failures = check.run(run)
+        except CheckSkipped as exc:
+            failures, skipped = [], str(exc)
         except Exception as exc:  # noqa: BLE001 - a broken tool may fail in any way
             failures = [f"{type(exc).__name__}: {exc}"]
-        out.append(CheckResult(check, not failures, failures, time.perf_counter() - start))
+        out.append(CheckResult(check, not failures, failures, time.perf_counter() - start,
+                               skipped))
         if failures and stop_at_failure:
             break
     return out

@@ -88,3 +88,41 @@ def test_a_fault_is_undone_when_the_block_raises():
         assert interval.trigger_points is not original
         raise RuntimeError("stop")
     assert interval.trigger_points is original
+
+
+def test_a_check_that_fails_raises_or_cannot_run_is_reported_so(tmp_path: Path):
+    from fretc.qualification.checks import Check, CheckSkipped
+    from fretc.qualification.suite import Outcome, run_checks
+
+    def skip(run):
+        raise CheckSkipped("no C compiler (cc, gcc or clang) on the PATH")
+
+    def broken(run):
+        raise OverflowError("a broken tool")
+
+    results = run_checks(checks.Run(tmp_path), [
+        Check("skip", ("TOR-GEN-003",), "", skip),
+        Check("fails", ("TOR-SEM-001",), "", lambda run: ["wrong key"]),
+        Check("raises", ("TOR-SEM-002",), "", broken),
+        Check("passes", ("TOR-SEM-003",), "", lambda run: [])])
+    outcome = Outcome(results)
+    got = {r["id"]: (r["result"], r["failures"]) for r in outcome.requirement_results()}
+    assert got["TOR-GEN-003"] == ("not checked here", [])
+    assert got["TOR-SEM-001"] == ("failed", ["fails: wrong key"])
+    assert got["TOR-SEM-002"] == ("failed", ["raises: OverflowError: a broken tool"])
+    assert got["TOR-SEM-003"] == ("passed", [])
+    assert outcome.failed_requirements == ["TOR-SEM-001", "TOR-SEM-002"]
+    assert not outcome.passed
+    assert [c.to_json()["result"] for c in results] == ["skipped", "failed", "failed", "passed"]
+    assert Outcome(results[:1] + results[3:]).passed
+
+
+def test_the_c_check_is_skipped_without_a_compiler(tmp_path: Path, monkeypatch):
+    import shutil
+
+    from fretc.qualification import checks_forms
+    from fretc.qualification.checks import CheckSkipped
+
+    monkeypatch.setattr(shutil, "which", lambda name: None)
+    with pytest.raises(CheckSkipped, match="no C compiler"):
+        checks_forms.check_c_monitors(checks.Run(tmp_path))
