@@ -33,11 +33,13 @@ def _files(folder: Path) -> list[Path]:
 
 @pytest.mark.tor("TOR-QUA-001")
 def test_qualify_passes_on_this_installation_and_writes_only_its_folder(tmp_path: Path):
-    home = tmp_path / "home"
+    home, temporary = tmp_path / "home", tmp_path / "tmp"
     home.mkdir()
-    got = qualify(["-o", str(tmp_path / "kit")], home)
+    temporary.mkdir()
+    got = qualify(["-o", str(tmp_path / "kit")], home, TMPDIR=str(temporary))
     assert got.returncode == 0, got.stdout + got.stderr
-    assert _files(home) == []  # no cache, no state, nothing outside the report's folder
+    # no cache, no state, no temporary file: nothing outside the report's folder
+    assert _files(home) == [] and _files(temporary) == []
     doc = json.loads((tmp_path / "kit" / "report.json").read_text(encoding="utf-8"))
     assert doc["result"] == "passed" and doc["failed_requirements"] == []
     origin = doc["environment"]["fretc"]
