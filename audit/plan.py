@@ -106,6 +106,32 @@ def _with_constants(entries: list, files: list[tuple[Path, Bindings]]) -> list:
     return entries
 
 
+def _with_definitions(entries: list, bindings: Bindings | None, notes: list[str]) -> list:
+    """``entries`` with the Internal variables their FRET export defines, and the bindings
+    do not bind, read as their definitions (FRET's glossary:
+    :func:`fretc.fretish.fret_variables.with_fret_constants`), each such variable named
+    once in ``notes``; a bound one is read from the log, as every bound variable is."""
+    from fretc.fretish.fret_definitions import definitions
+    from fretc.fretish.fret_variables import names_read, with_fret_constants
+
+    bound = set(bindings.variables) | set(bindings.per_entity) if bindings is not None \
+        else set()
+    out, said = [], set()
+    for e in entries:
+        if not getattr(e, "variables", ()) or e.requirement is None:
+            out.append(e)
+            continue
+        defs = definitions(tuple(e.variables)).values
+        used = sorted(n for n in names_read([e]) if n in defs and n not in bound)
+        for n in used:
+            if n not in said:
+                said.add(n)
+                notes.append(f"{n}: FRET's definition of this Internal variable computed "
+                              "from the variables it reads (no binding of its own)")
+        out.append(with_fret_constants(e, keep=bound) if used else e)
+    return out
+
+
 def _build_plan(config: AuditConfig, files: list[tuple[Path, Bindings]]) -> AuditPlan:
     """The plan of one set of bindings (:func:`load_plan` without ``[logs]`` selection;
     ``files``: its binding files, read)."""
@@ -114,6 +140,7 @@ def _build_plan(config: AuditConfig, files: list[tuple[Path, Bindings]]) -> Audi
     notes: list[str] = []
     unformalized: list = []
     entries = _with_constants(_read_requirements(config, notes, unformalized), files)
+    entries = _with_definitions(entries, bindings, notes)
     period, nominal = _bindings_periods(bindings)
     plans: list[RequirementPlan] = []
     to_compile = []

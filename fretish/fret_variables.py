@@ -121,16 +121,18 @@ def constant_of(v: FretVariable) -> A.Expr | None:
     return None
 
 
-def with_fret_constants(entry: Any) -> Any:
+def with_fret_constants(entry: Any, keep: Collection[str] = ()) -> Any:
     """``entry`` (:class:`fretc.fretish.entry.RequirementEntry`) with each Internal variable
     of its FRET export that FRET defines replaced by its definition in its requirement's
     expressions (conditions, response, stop condition, a scope's condition or mode): a
     literal by that constant, a Lustre expression by its FRETish reading with the Internal
     variables it reads expanded (:mod:`fretc.fretish.fret_definitions`); those fretc keeps
-    free stay variables. The entry itself when there is none."""
+    free stay variables, and so do those in ``keep`` (``fretc audit``: the variables the
+    bindings bind, read from the log). The entry itself when there is none."""
     from fretc.fretish.fret_definitions import definitions, substitute
 
-    values = definitions(tuple(entry.variables)).values
+    values = {k: v for k, v in definitions(tuple(entry.variables)).values.items()
+              if k not in keep}
     req = entry.requirement
     if not values or req is None or req.freeform:
         return entry
