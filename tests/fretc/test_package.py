@@ -28,13 +28,14 @@ ROOT = Path(__file__).resolve().parents[2]
 DATA = ("fretc/fretish/grammar.lark", "fretc/signals/bindings/grammar.lark",
         "fretc/templates/monitor_module.py.j2", "fretc/templates/report.html.j2",
         "fretc/sim/data/reactor_room_map.yaml", "fretc/sim/spaces/environment.toml",
-        "fretc/compiler/table/after-holding-after-0.json")
+        "fretc/compiler/table/after-holding-after-0.json",
+        "fretc/qualification/requirements.toml", "fretc/qualification/known_problems.toml")
 
 
 #: what the wheel is built from: pyproject.toml's package folders and the README it names
 SOURCES = ("pyproject.toml", "README.md", "src", "common", "fretish", "compiler", "check",
            "logs", "signals", "monitors", "audit", "testing", "shield", "live", "sim", "reports",
-           "editor", "templates")
+           "editor", "qualification", "templates")
 
 
 @pytest.fixture(scope="module")
@@ -67,7 +68,8 @@ def test_the_wheel_holds_one_import_package_and_its_data(wheel):
     assert not missing, missing
     # every source module is in it, as fretc.<folder>...
     for folder in ("common", "fretish", "compiler", "check", "logs", "signals", "monitors",
-                   "audit", "testing", "shield", "live", "sim", "reports", "editor"):
+                   "audit", "testing", "shield", "live", "sim", "reports", "editor",
+                   "qualification"):
         for p in (ROOT / folder).rglob("*.py"):
             assert f"fretc/{p.relative_to(ROOT).as_posix()}" in names, p
     assert "fretc/cli/__init__.py" in names and "fretc/__main__.py" in names
@@ -158,3 +160,22 @@ def test_run_from_the_clone_the_installed_package_is_found(wheel, tmp_path):
     where = subprocess.run([str(python), "-c", "import fretc.cli; print(fretc.cli.__file__)"],
                            cwd=ROOT, env=env, capture_output=True, text=True, timeout=120)
     assert str(tmp_path / "env") in where.stdout, where.stdout
+
+
+@pytest.mark.tor("TOR-QUA-001")
+def test_qualify_passes_on_a_fresh_install(wheel, tmp_path):
+    # the kit's validation suite on the wheel installed into a fresh environment, run from a
+    # folder outside the checkout: it needs nothing of the clone (its tests, its data)
+    python = _venv_beside_this_one(tmp_path / "env")
+    _pip_install(python, wheel)
+    (tmp_path / "home").mkdir()
+    env = {k: v for k, v in os.environ.items()
+           if k != "PYTHONPATH" and not k.startswith(("XDG_", "FRETC_"))}
+    env["HOME"] = str(tmp_path / "home")
+    proc = subprocess.run([str(python), "-m", "fretc", "qualify", "-o", str(tmp_path / "kit")],
+                          cwd=tmp_path, env=env, capture_output=True, text=True, timeout=600)
+    assert proc.returncode == 0, proc.stdout[-2000:] + proc.stderr[-2000:]
+    doc = json.loads((tmp_path / "kit" / "report.json").read_text(encoding="utf-8"))
+    assert doc["result"] == "passed" and all(m["killed"] for m in doc["mutants"])
+    assert doc["environment"]["python"]["executable"].startswith(str(tmp_path / "env"))
+
