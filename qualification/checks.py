@@ -264,6 +264,41 @@ def check_durations(run: Run) -> list[str]:
     return out
 
 
+#: sentences FRET formalizes wrongly and fretc refuses (docs/reference/semantics.md, FRET's
+#: defects 3, 6 and 7): each with words the error must hold
+REFUSED = (("the sw shall immediately satisfy preBool(0, p)", "preBool"),
+           ("the sw shall immediately satisfy persisted(2, 0, p)", "lower bound 2"),
+           ("the sw shall immediately satisfy absReal(x, y) > 1", "absReal takes 1"))
+
+
+def check_fret_forms(run: Run) -> list[str]:
+    """FRET's names in the formulas (``a.b`` as ``a_DOT_b``, a quoted name character by
+    character); a probability's five-part key and its LTL key; the FRET defects fretc does
+    not copy refused with an error naming the fault."""
+    from fretc.common.errors import FretcError
+    from fretc.compiler.build import compile_entry
+
+    out = []
+    ft = compile_entry(_entry("N", 'the sw shall immediately satisfy a.b & "weird var"')
+                       ).to_json()["ft"]
+    if ft != "(a_DOT_b & _DQT_weird_SPC_var_DQT_)":
+        out.append(f"names: ft {ft!r}, expected FRET's (a_DOT_b & _DQT_weird_SPC_var_DQT_)")
+    doc = compile_entry(_entry(
+        "P", "upon c the sw shall, with probability >= 0.9, within 1 tick satisfy r")).to_json()
+    if (doc["key"], doc.get("key_ltl")) != ("null,regular,bound,within,satisfaction",
+                                            "null,regular,within,satisfaction"):
+        out.append(f"probability: keys {doc['key']}, {doc.get('key_ltl')}")
+    for text, words in REFUSED:
+        error: Exception | None
+        try:
+            error = compile_entry(_entry("D", text)).error
+        except FretcError as exc:
+            error = exc
+        if error is None or words not in str(error):
+            out.append(f"{text!r}: {error!r}, expected an error naming {words!r}")
+    return out
+
+
 def _text(trace: list[dict[str, bool]]) -> str:
     """A trace as one word per tick: the variables true there (``-`` for none)."""
     return " ".join("".join(v for v in ref.VARIABLES if t[v]) or "-" for t in trace)
@@ -285,4 +320,6 @@ CHECKS: tuple[Check, ...] = (
           "generated Python monitors on every key against the reference", check_monitors),
     Check("semantics-durations", ("TOR-SEM-010",),
           "durations convert with the tick period, exactly", check_durations),
+    Check("semantics-fret-forms", ("TOR-SEM-009", "TOR-SEM-011", "TOR-SEM-012"),
+          "FRET's names, a probability's keys, FRET's defects refused", check_fret_forms),
 )
