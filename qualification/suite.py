@@ -73,15 +73,19 @@ class Outcome:
 
     def requirement_results(self) -> list[dict[str, Any]]:
         """Per requirement of ``requirements.toml``, in its order: ``id``, ``area``,
-        ``statement``, ``source``, ``result`` (``passed``, ``failed`` or ``not checked
-        here``), ``checks`` (the names of those that show it) and ``failures``."""
+        ``statement``, ``source``, ``result`` (``passed``, ``failed``, ``not checked here``:
+        the project's tests show it, or ``not verified``: the requirements file says why no
+        test does, ``not_verified``), ``checks`` (the names of those that show it) and
+        ``failures``."""
         out = []
         for req in load_requirements():
             mine = [r for r in self.checks if req.id in r.check.tors and r.ran]
             failed = [r for r in mine if not r.passed]
-            result = ("failed" if failed else "passed") if mine else "not checked here"
+            result = (("failed" if failed else "passed") if mine else
+                      "not verified" if req.not_verified else "not checked here")
             out.append({"id": req.id, "area": req.area, "statement": req.statement,
                         "source": req.source, "result": result,
+                        "not_verified": req.not_verified,
                         "checks": [r.check.name for r in mine],
                         "failures": [f"{r.check.name}: {f}" for r in failed
                                      for f in r.failures]})
