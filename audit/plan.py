@@ -165,6 +165,7 @@ def _build_plan(config: AuditConfig, files: list[tuple[Path, Bindings]]) -> Audi
         _attach(rp, c, classes, skipped)
         if (c.entry.source, c.id) in sources:  # the automata built with the module, not again
             rp._msource = sources[(c.entry.source, c.id)]
+    bindings = _with_elements(bindings, plans, notes)
     csv_period = bindings.tick.period_ns if (bindings is not None
                                              and bindings.tick.period_ns) else None
     if csv_period is None:
@@ -178,6 +179,39 @@ def _build_plan(config: AuditConfig, files: list[tuple[Path, Bindings]]) -> Audi
     return AuditPlan(config, plans, bindings, binding_files, modules, max(1, csv_period),
                      freeform, notes + _unused_bindings(bindings, plans),
                      not_formalized=unformalized)
+
+
+_ELEMENT = re.compile(r"([A-Za-z][A-Za-z0-9_.%]*)\s*\(\s*([0-9]+)\s*\)\Z")
+_PATH = re.compile(r"\s*/[A-Za-z0-9_/]*(?:\.[A-Za-z_][A-Za-z0-9_]*|\[-?[0-9]+\])*\s*\Z")
+
+
+def _with_elements(bindings: Bindings | None, plans: list[RequirementPlan],
+                   notes: list[str]) -> Bindings | None:
+    """``bindings`` with a binding for each array element a requirement reads as FRET
+    writes it, ``yout(3)`` (FRET's exports from Simulink: MATLAB's indexing, the first
+    element is 1), where the bindings bind the array ``yout`` to a field path and not the
+    element itself: ``yout(3)`` is the path's item ``[2]`` (docs/bindings.md); one note per
+    element says so. A binding of the element itself wins; an array bound to an expression
+    that is not a path gets none (the variable stays unbound, named as such)."""
+    if bindings is None:
+        return None
+    added: dict[str, str] = {}
+    for rp in plans:
+        for name in rp.variables:
+            m = _ELEMENT.match(name)
+            base = bindings.variables.get(m.group(1)) if m else None
+            if m is None or name in bindings.variables or name in added or base is None \
+                    or not _PATH.match(base.expr) or int(m.group(2)) < 1:
+                continue
+            added[name] = f"{base.expr.strip()}[{int(m.group(2)) - 1}]"
+            notes.append(f"{name}: the element {m.group(2)} of {m.group(1)} (FRET counts from "
+                         f"1), bound to {added[name]}")
+    if not added:
+        return bindings
+    from fretc.signals.bindings.spec import make_bindings
+
+    extra = make_bindings(added, bindings.tick).variables
+    return dataclasses.replace(bindings, variables={**bindings.variables, **extra})
 
 
 def _read_requirements(config: AuditConfig, skipped: list[str],
@@ -316,7 +350,8 @@ def _unused_bindings(bindings: Bindings | None, plans: list[RequirementPlan]) ->
     """A remark per bound variable that no requirement uses."""
     warnings = []
     if bindings is not None:
-        used = used_variables(plans)
+        used = set(used_variables(plans))
+        used |= {m.group(1) for n in used if (m := _ELEMENT.match(n))}  # (arrays: yout(3))
         # a requirement that failed before its variables were known (a syntax error) may
         # use any name of its text: never call those unused
         failed = " ".join(rp.text for rp in plans
