@@ -34,6 +34,7 @@ from __future__ import annotations
 
 import copy
 import itertools
+import math
 import tomllib
 from collections.abc import Callable
 from pathlib import Path
@@ -42,8 +43,10 @@ from typing import Any
 from fretc.common.problems import SignalError
 from fretc.shield.plan import ShieldError
 from fretc.shield.runtime import Decision, ShieldRuntime, Unreadable, truth
-from fretc.signals.bindings.compile import EvalState
+from fretc.signals.bindings.compile import EvalState, compile_node
 from fretc.signals.bindings.expression import Field, FuncCall, UnaryOp
+from fretc.signals.bindings.extract import normalize_scalar
+from fretc.signals.bindings.operations import Ops
 from fretc.signals.bindings.spec import Bindings
 
 __all__ = ["MessageShield", "ShieldInputError", "proposals_of", "default_message"]
@@ -121,6 +124,8 @@ class MessageShield:
         #: the inputs of the last tick whose inputs were read (the order of a fallback's
         #: messages is chosen with them)
         self.last_inputs: dict[str, Any] | None = None
+        #: input variable -> its binding compiled with the log's ±inf read as numbers
+        self._inf_kept: dict[str, Callable[[EvalState], Any]] = {}
 
     def _read(self, v: str) -> bool:
         return any(s[0] == v for m in self.runtime.machines for s in (*m.ins, *m.outs))
@@ -230,7 +235,8 @@ class MessageShield:
             if not self._read(v):
                 continue
             try:
-                inputs[v] = self.bindings.variables[v].evaluate(self.state, f" at {now_ns} ns")
+                value = self.bindings.variables[v].evaluate(self.state, f" at {now_ns} ns")
+                inputs[v] = value if value == value else self._unread_why(v, value)
             except SignalError as exc:
                 inputs[v] = Unreadable(f"{v}: {exc}")
             except KeyError as exc:  # a topic not heard yet
@@ -238,6 +244,35 @@ class MessageShield:
             except Exception as exc:  # (any other value the binding cannot read)
                 inputs[v] = Unreadable(f"{v}: {type(exc).__name__}: {exc}")
         return inputs
+
+    def _unread_why(self, v: str, nan: Any) -> Any:
+        """The input ``v`` whose binding gave NaN: an :class:`Unreadable` naming the value
+        when that NaN is a log field's ±inf read as unread (docs/bindings.md, "NaN, ±inf":
+        ``[tick] inf = "unread"``, the default), its binding evaluated again with the log's
+        ±inf as numbers: ``v is +inf`` or ``v is -inf`` (the binding's value), or ``v reads
+        ±inf`` (an expression that makes a number of it); ``nan`` itself otherwise (the
+        runtime says ``v is NaN``)."""
+        if self.bindings.tick.inf == "value":
+            return nan
+        b = self.bindings.variables[v]
+        if b.window is not None or b.tick_window is not None:
+            return nan  # (a window's messages are not held here: its NaN is left as it is)
+        variant = self._inf_kept.get(v)
+        if variant is None:
+            body = b.ast.args[0] if b.aggregate is not None else b.ast  # type: ignore[attr-defined]
+            variant = compile_node(body, Ops(False, self.bindings.tick.nan != "false", False),
+                                   {}, b.constants)
+            self._inf_kept[v] = variant
+        try:
+            got = normalize_scalar(variant(self.state))
+        except Exception:  # (the binding read once already; a variant that fails says nothing)
+            return nan
+        why = 'a log field\'s ±inf is unread: [tick] inf = "value" reads it as a number'
+        if got == math.inf or got == -math.inf:
+            return Unreadable(f"{v} is {'+' if got > 0 else '-'}inf ({why})")
+        if type(got) in (bool, float) and got == got:
+            return Unreadable(f"{v} reads ±inf ({why})")
+        return nan
 
     def _order(self, msgs: list[tuple[str, Any]], before: tuple[Any, ...],
                inputs: dict[str, Any], now_ns: int) -> list[tuple[str, Any]]:
