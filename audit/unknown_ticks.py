@@ -81,7 +81,7 @@ def judge_three(r: RequirementPlan, res: ClockPass, v: Verdict, j: Judgement, na
         holds = _at_cut(r, res, v, holds, ev, status, st_tick, n)
     elif holds is None:
         v.verdict = "unknown"
-        v.unknown_reason = _why(res, unknown, n, outgrew)
+        v.unknown_reason = _why(res, unknown, n, outgrew, r.variables)
     if holds is True and ev is not None and ev.triggers == 0:
         ev.vacuous = True
         if parts is not None and possible_trigger(parts):
@@ -116,13 +116,25 @@ def _cause(g) -> str:
     return g.cause or "gap"
 
 
-def _why(res: ClockPass, unknown: np.ndarray, n: int, outgrew: str = "") -> str:
+def _why(res: ClockPass, unknown: np.ndarray, n: int, outgrew: str = "",
+         variables: tuple[str, ...] | list[str] = ()) -> str:
     """The unknown verdict's reason: its unknown ticks and the gaps behind them (and
-    ``outgrew``: why the ways of filling them were not all followed)."""
+    ``outgrew``: why the ways of filling them were not all followed). With no gap, what
+    the unknown ticks read: the ``variables`` (the requirement's) whose values the log
+    marks unknown (a CSV trace's ``unknown`` cells and ``gap`` rows: ``unknown values of
+    x``), and comparisons that read NaN at the other unknown ticks."""
     k = int(unknown.sum())
     first = int(np.argmax(unknown)) if k else 0
     causes = sorted({_cause(g) for g in res.gaps})
-    what = ", ".join(causes) if causes else "comparisons with NaN"
+    if not causes:
+        marked = [name for name in variables
+                  if (m := res.unknown.get(name)) is not None and m[:n].any()]
+        rest = unknown.copy()
+        for name in marked:
+            rest &= ~res.unknown[name][:n]
+        causes = ([f"unknown values of {', '.join(marked)}"] if marked else []) + \
+            (["comparisons with NaN"] if rest.any() or not marked else [])
+    what = ", ".join(causes)
     if res.lost_words:
         what += f": {res.lost_words}"
     depends = "may depend" if outgrew else "depends"
