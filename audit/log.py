@@ -435,7 +435,7 @@ class _LogRun:
             la.problems = [problem_json(p) for p in self.problems.values()]
             la.problem_counts = dict(sorted(self.problem_counts.items()))
         la.start_time_ns = source.start_time
-        la.end_time_ns = source.end_time
+        la.end_time_ns = log_end(source)
         check_nominal_rate(la, self.bindings)
         for r in self.plan.requirements:  # the measured rate in the nominal_rate hint
             v = self.verdicts[r.index]
@@ -566,6 +566,18 @@ def _tick_figures(v: Verdict, s: Any, r: RequirementPlan, n: int, b: Bindings | 
     v.first_tick_ns = s.first_time
     v.last_tick_ns = s.end_time
     v.waiting_for = list(s.waiting_for)
+
+
+def log_end(source: LogSource) -> int | None:
+    """The log's end (ns, log time) in the audit JSON's ``end_time_ns``: the last log time
+    of a message of any topic, whichever topics the audit read. A source that knows it when
+    opened (``log_end``: PX4 ULog, ArduPilot DataFlash) gives it; otherwise the source's
+    ``end_time`` (an MCAP's summary end, or the last message of the pass). The same end
+    ``age()``'s grid runs to (:func:`fretc.signals.clock.silence_end`)."""
+    end, known = source.end_time, getattr(source, "log_end", None)
+    if known is None:
+        return end
+    return known if end is None else max(end, known)
 
 
 def log_engine(verdicts: Iterable[Verdict]) -> str | None:

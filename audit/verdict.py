@@ -354,7 +354,9 @@ class LogAudit:
             was lost). Only ticks before it are judged; ``ticks_after_damage`` counts the
             ticks sampled after it and not judged.
         start_time_ns: time of the first tick (evaluated or not); ``first_time_ns`` of the
-            first evaluated tick; ``end_time_ns`` of the last tick.
+            first evaluated tick; ``end_time_ns`` the log's end, the log time of its last
+            message of any topic (:func:`fretc.audit.log.log_end`; after damage with ticks
+            not judged, the last tick judged).
         ticks_evaluated, warmup_ticks: evaluated ticks, and ticks before every bound topic
             had a message (not evaluated); ``waiting_for`` the topics still silent at the
             first tick; ``missing_topics`` bound topics that never had a message.
