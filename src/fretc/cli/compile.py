@@ -2,7 +2,8 @@
 FRET's LTL and PCTL (``--emit ltl``, text or ``--json``), Python runtime monitors (``--emit
 monitor``), AJPF properties (``--emit psl``), PRISM properties (``--emit prism``), C99
 monitors (``--emit c -o DIR``, :mod:`fretc.cli.emit_c`) or R2U2's C2PO specifications
-(``--emit c2po``).
+(``--emit c2po``), CoCoSpec contracts for Kind 2 (``--emit cocospec``) or Ogma's FRET
+component specifications (``--emit ogma``; both :mod:`fretc.cli.emit_c`).
 
 Exit codes: 0 success, 1 a requirement failed, 2 usage or input errors, 4 an internal error
 (a generated monitor that is not valid: nothing is written). Only click and the standard
@@ -56,14 +57,18 @@ def _load(paths, tick_period: str | None = None) -> list:
 
 @click.command("compile")
 @click.argument("files", nargs=-1, required=True, type=click.Path(exists=True))
-@click.option("--emit", type=click.Choice(["ltl", "monitor", "psl", "prism", "c", "c2po"]),
+@click.option("--emit", type=click.Choice(["ltl", "monitor", "psl", "prism", "c", "c2po",
+                                          "cocospec", "ogma"]),
               default="ltl", show_default=True,
               help="What to produce: FRET's LTL (and PCTL), Python monitors, AJPF properties, "
                    "PRISM properties (FRET's bounds at each trigger), C99 monitors with a CSV "
-                   "runner (-o DIR), or R2U2's C2PO specifications.")
+                   "runner (-o DIR), R2U2's C2PO specifications, CoCoSpec contracts for "
+                   "Kind 2 (one .lus per component), or Ogma's FRET component "
+                   "specifications (one .json per component).")
 @click.option("--json", "as_json", is_flag=True, help="ltl: print a JSON list instead of text.")
 @click.option("-o", "--output", type=click.Path(), default=None,
-              help="monitor/psl/prism: output file (one input) or directory; default: stdout.")
+              help="monitor/psl/prism/c2po: output file (one input) or directory; "
+                   "cocospec/ogma: file (one component) or directory; default: stdout.")
 @click.option("--psl-map", type=click.Path(exists=True), default=None,
               help="psl: TOML mapping of variables to AJPF beliefs, percepts and actions.")
 @click.option("--split", is_flag=True,
@@ -114,6 +119,11 @@ def compile_cmd(files: tuple[str, ...], emit: str, as_json: bool, output: str | 
         inputs = _inputs(files, psl_map)
         write_c2po(compiled, output, _check_output,
                    lambda outs, path, suffix: _write_outputs(outs, path, suffix, inputs))
+    elif emit in ("cocospec", "ogma"):
+        from fretc.cli.emit_c import write_exports
+        inputs = _inputs(files, psl_map)
+        write_exports(emit, compiled, output, _check_output,
+                      lambda outs, path, suffix: _write_outputs(outs, path, suffix, inputs))
     elif emit == "prism":
         from fretc.compiler.prism import emit_prism  # lazy: only for prism
         refused: list = []

@@ -1,6 +1,8 @@
-"""``fretc FILE --emit c -o DIR`` and ``--emit c2po``: the C99 monitors of
-:mod:`fretc.compiler.c_codegen` and the R2U2 specifications of :mod:`fretc.compiler.c2po`,
-written by ``fretc compile`` (:mod:`fretc.cli.compile`)."""
+"""``fretc FILE --emit c -o DIR``, ``--emit c2po``, ``--emit cocospec`` and ``--emit ogma``:
+the C99 monitors of :mod:`fretc.compiler.c_codegen`, the R2U2 specifications of
+:mod:`fretc.compiler.c2po`, the Kind 2 contracts of :mod:`fretc.compiler.cocospec` and
+Ogma's component specifications of :mod:`fretc.compiler.ogma`, written by ``fretc compile``
+(:mod:`fretc.cli.compile`)."""
 
 from __future__ import annotations
 
@@ -16,7 +18,7 @@ from fretc.cli.options import shown
 if TYPE_CHECKING:
     from fretc.compiler.build import Compiled
 
-__all__ = ["write_c", "write_c2po"]
+__all__ = ["write_c", "write_c2po", "write_exports"]
 
 
 def write_c(compiled: Sequence[Compiled], output: str | None, split: bool,
@@ -66,3 +68,33 @@ def write_c2po(compiled: Sequence[Compiled], output: str | None,
         if rid not in reported:
             click.echo(shown(f"not in {stem}.c2po: {rid}: {why}".replace("\n", " ")),
                        err=True)
+
+
+def write_exports(emit: str, compiled: Sequence[Compiled], output: str | None,
+                  check_output: Callable[[dict, str | None, str], None],
+                  write_outputs: Callable[[dict, str | None, str], None]) -> None:
+    """``--emit cocospec`` (``<component>Spec.lus``) or ``--emit ogma``
+    (``<component>Spec.json``): one file per component, as FRET's exports name them (``-o``
+    a file for one, a folder for several; stdout without ``-o``: ``fretc compile``'s
+    ``check_output`` and ``write_outputs``, which refuse an output over an input); each
+    requirement left out is named on stderr with the reason."""
+    if emit == "cocospec":
+        from fretc.compiler.cocospec import emit_cocospec
+
+        outputs, skipped = emit_cocospec(compiled)
+        notes: list[str] = []
+        suffix = ".lus"
+    else:
+        from fretc.compiler.ogma import emit_ogma
+
+        outputs, skipped, notes = emit_ogma(compiled)
+        suffix = ".json"
+    check_output(outputs, output, suffix)
+    write_outputs(outputs, output, suffix)
+    reported = {c.id for c in compiled if c.error is not None}
+    for stem, rid, why in skipped:
+        if rid not in reported:
+            where = "" if stem == "-" else f" ({stem}{suffix})"  # "-": in no file
+            click.echo(shown(f"skipped {rid}{where}: {why}".replace("\n", " ")), err=True)
+    for note in notes:
+        click.echo(shown(f"note: {note}"), err=True)

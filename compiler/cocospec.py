@@ -1,0 +1,548 @@
+"""CoCoSpec contracts for Kind 2 (``fretc FILE --emit cocospec``), as FRET's CoCoSpec export
+makes them.
+
+FRET (its Analysis Portal, "Export" with language CoCoSpec) writes one Lustre file per
+component, ``<component>Spec.lus``: a library of past-time operators as Lustre nodes, then
+the contract ``<component>Spec`` whose inputs and outputs are the component's Input and
+Output variables (types from the glossary: ``boolean`` -> ``bool``, integers -> ``int``,
+``single``/``double`` -> ``real``), its Internal variables as ``var NAME: TYPE = DEF;``, and
+one ``guarantee "ID" EXPR;`` per requirement (``assume`` when the id says ``assumption``),
+EXPR being the requirement's pt formula in Lustre. fretc writes the same, from its pt formula
+IR (never from printed text), as a Kind 2 contract node (Kind 2's documentation, "Contracts":
+``contract NAME(INPUTS) returns (OUTPUTS); let ... tel``), which a node takes with
+``(*@contract import NAME(...) returns (...); *)``.
+
+The translation (FRET's names and argument orders, so a contract reads as FRET's):
+
+* ``! & | xor -> <->`` as ``not and or xor => =``; comparisons with ``<>`` for ``!=``;
+  ``+ - * /``, ``mod`` (integers only);
+* ``Y p`` as ``YtoPre(p)`` (false at the first tick), ``Z p`` as ``ZtoPre(p)`` (true there),
+  FRET's first timepoint as ``ZtoPre(false)``; ``H p``, ``O p``;
+* ``a S b`` as ``S(b, a)`` and ``a T b`` as ``T(b, a)`` (FRET's nodes take the event
+  first);
+* bounded ``O[l,h] p`` as ``OT(h, l, p)``, ``H[l,h] p`` as ``HT(h, l, p)`` (FRET's order:
+  the far end first); ``OT`` reads ``p`` delayed by ``l`` ticks through ``delay``, a node
+  that dispatches to one ``delayN`` per bound the file uses, as FRET's does;
+* ``absReal``, ``maxReal`` ... and ``preBool``/``preInt``/``preReal`` as FRET's library
+  nodes of those names.
+
+Kind 2 converts no type implicitly: a number prints as its context's type (``3.0`` beside a
+real); a term that mixes integer and real variables, ``/`` of integers, ``^`` (Lustre has no
+power), uninterpreted functions, an if-then-else of numbers and a pt formula that needs the
+future are refused, the requirement left out with the reason. The library is fretc's own
+Lustre; each node's meaning is tested against fretc's reference evaluator
+(``tests/compiler/test_cocospec.py``).
+"""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
+
+from fretc.common.textsafe import one_line
+
+from fretc.compiler import ir
+from fretc.compiler.ir import Node, name_of
+from fretc.compiler.printers import mangle
+
+if TYPE_CHECKING:
+    from fretc.compiler.build import Compiled
+
+__all__ = ["CocospecUnsupported", "Contract", "LIBRARY", "component_of", "contracts",
+           "declared_variables", "emit_cocospec", "library_text", "lustre", "lustre_type",
+           "used_types"]
+
+
+class CocospecUnsupported(ValueError):
+    """A pt formula Lustre (or Kind 2's typing) cannot say; the message names what."""
+
+
+#: Lustre's and Kind 2's keywords, which no variable may be named (renamed ``NAME_v``)
+LUSTRE_KEYWORDS = frozenset("""
+    and assert assume bool const contract div else ensure enum false fby guarantee if import
+    imported include int let merge mod mode node not of or pre real require returns struct
+    tel then true type var when with xor function activate restart every condact current
+    check sofar const
+""".split())
+
+#: FRET's operator nodes as fretc writes them: name -> (the nodes it calls, its Lustre text).
+#: ``delay`` is written per file (:func:`_delay_nodes`).
+LIBRARY: dict[str, tuple[tuple[str, ...], str]] = {
+    "H": ((), """-- H(X): X has held at every tick so far
+node H(X: bool) returns (Y: bool);
+let
+  Y = X -> (X and pre Y);
+tel"""),
+    "O": ((), """-- O(X): X has held at some tick so far
+node O(X: bool) returns (Y: bool);
+let
+  Y = X or (false -> pre Y);
+tel"""),
+    "S": ((), """-- S(X, Y): Y since X (X now, or Y now and S(X, Y) a tick ago)
+node S(X, Y: bool) returns (Z: bool);
+let
+  Z = X or (Y and (false -> pre Z));
+tel"""),
+    "T": ((), """-- T(X, Y): Y triggered X (X now, and Y now or T(X, Y) a tick ago, true before
+-- the first tick)
+node T(X, Y: bool) returns (Z: bool);
+let
+  Z = X and (Y or (true -> pre Z));
+tel"""),
+    "YtoPre": ((), """-- YtoPre(X): X a tick ago (false at the first tick)
+node YtoPre(X: bool) returns (Y: bool);
+let
+  Y = false -> pre X;
+tel"""),
+    "ZtoPre": ((), """-- ZtoPre(X): X a tick ago (true at the first tick)
+node ZtoPre(X: bool) returns (Y: bool);
+let
+  Y = true -> pre X;
+tel"""),
+    "OTlore": ((), """-- OTlore(N, X): X held at one of the last N+1 ticks (this one included)
+node OTlore(N: int; X: bool) returns (Y: bool);
+var C: int;
+let
+  -- ticks since X last held, -1 before it ever did, counted no further than N+1
+  C = if X then 0
+      else (-1 -> if pre C < 0 or pre C > N then pre C else pre C + 1);
+  Y = 0 <= C and C <= N;
+tel"""),
+    "OT": (("delay", "OTlore"), """-- OT(L, R, X): X held at some tick between L and R ticks ago (L >= R >= 0)
+node OT(L: int; R: int; X: bool) returns (Y: bool);
+let
+  Y = OTlore(L - R, delay(X, R));
+tel"""),
+    "HT": (("OT",), """-- HT(L, R, X): X held at every tick between L and R ticks ago (L >= R >= 0)
+node HT(L: int; R: int; X: bool) returns (Y: bool);
+let
+  Y = not OT(L, R, not X);
+tel"""),
+    "preBool": ((), """-- preBool(I, X): X a tick ago, I at the first tick
+node preBool(I, X: bool) returns (Y: bool);
+let
+  Y = I -> pre X;
+tel"""),
+    "preInt": ((), """-- preInt(I, X): X a tick ago, I at the first tick
+node preInt(I, X: int) returns (Y: int);
+let
+  Y = I -> pre X;
+tel"""),
+    "preReal": ((), """-- preReal(I, X): X a tick ago, I at the first tick
+node preReal(I, X: real) returns (Y: real);
+let
+  Y = I -> pre X;
+tel"""),
+    "absReal": ((), """node absReal(X: real) returns (Y: real);
+let
+  Y = if X >= 0.0 then X else -X;
+tel"""),
+    "absInt": ((), """node absInt(X: int) returns (Y: int);
+let
+  Y = if X >= 0 then X else -X;
+tel"""),
+    "maxReal": ((), """node maxReal(A, B: real) returns (Z: real);
+let
+  Z = if A >= B then A else B;
+tel"""),
+    "maxInt": ((), """node maxInt(A, B: int) returns (Z: int);
+let
+  Z = if A >= B then A else B;
+tel"""),
+    "minReal": ((), """node minReal(A, B: real) returns (Z: real);
+let
+  Z = if A <= B then A else B;
+tel"""),
+    "minInt": ((), """node minInt(A, B: int) returns (Z: int);
+let
+  Z = if A <= B then A else B;
+tel"""),
+}
+
+_BOOL_BIN = {"&": "and", "|": "or", "xor": "xor", "->": "=>", "<->": "="}
+_CMP = {"=": "=", "!=": "<>", "<": "<", "<=": "<=", ">": ">", ">=": ">="}
+_FN_TYPE = {"absReal": "real", "maxReal": "real", "minReal": "real", "absInt": "int",
+            "maxInt": "int", "minInt": "int", "preReal": "real", "preInt": "int"}
+
+
+def lustre_type(data_type: str) -> str | None:
+    """The Lustre type of FRET's glossary ``dataType``, as FRET's CoCoSpec export maps it:
+    ``boolean`` -> ``bool``, a name with ``int`` in it (``integer``, ``unsigned integer``,
+    ``int32`` ...) -> ``int``, another (``single``, ``double``) -> ``real``; None for ``""``
+    (not given)."""
+    if not data_type:
+        return None
+    if data_type == "boolean":
+        return "bool"
+    return "int" if "int" in data_type else "real"
+
+
+def lustre(n: Node, names: dict[str, str], types: dict[str, str],
+           used: set[str] | None = None) -> str:
+    """The Lustre text of the pt formula ``n`` (module docstring). ``names`` maps each FRET
+    variable to its Lustre name, ``types`` each numeric one to ``int`` or ``real`` (absent:
+    real). ``used`` (when given) gets the library nodes the text calls and ``delayN`` for
+    each delay. Raises :class:`CocospecUnsupported` naming what Lustre or Kind 2's typing
+    cannot say."""
+    calls: set[str] = set() if used is None else used
+    memo: dict[Node, str] = {}
+
+    def go(x: Node) -> str:
+        got = memo.get(x)
+        if got is None:
+            got = memo[x] = _formula(x, go, names, types, calls)
+        return got
+
+    return go(n)
+
+
+def _formula(n: Node, go, names, types, calls: set[str]) -> str:
+    op, a = n.op, n.args
+    if op in ("true", "false"):
+        return op
+    if op == "ap":
+        return names[name_of(n)]
+    if op == "FTP":
+        calls.add("ZtoPre")
+        return "ZtoPre(false)"
+    if op == "past":
+        return go(a[0])
+    if op == "!":
+        return f"(not {go(a[0])})"
+    if op in _BOOL_BIN:
+        return f"({go(a[0])} {_BOOL_BIN[op]} {go(a[1])})"
+    if op == "cmp":
+        kind = _context(n, types)
+        return (f"({_term(a[0], kind, names, types, calls)} {_CMP[name_of(n)]} "
+                f"{_term(a[1], kind, names, types, calls)})")
+    if op == "pre" and n.name == "preBool":
+        calls.add("preBool")
+        return f"preBool({go(a[0])}, {go(a[1])})"
+    if op in ("Y", "Z"):
+        name = "YtoPre" if op == "Y" else "ZtoPre"
+        calls.add(name)
+        return f"{name}({go(a[0])})"
+    if op in ("O", "H"):
+        if n.hi is None:
+            calls.add(op)
+            return f"{op}({go(a[0])})"
+        lo, hi = ir.window(n)
+        calls.update((f"{op}T", "OT"))
+        if lo:
+            calls.add(f"delay{lo}")
+        return f"{op}T({hi}, {lo}, {go(a[0])})"
+    if op in ("S", "T"):
+        calls.add(op)
+        return f"{op}({go(a[1])}, {go(a[0])})"
+    raise CocospecUnsupported(_refusal(n))
+
+
+def _refusal(n: Node) -> str:
+    op = n.op
+    if op == "future":
+        return (f"the pt formula needs the future-time function {n.name}, which a "
+                "past-time Lustre contract cannot read")
+    if op == "call" or op == "fn":
+        return f"the function {n.name} has no Lustre node here (uninterpreted)"
+    return f"Lustre has no form of {op!r} here"
+
+
+def _vars_of(n: Node) -> list[Node]:
+    return [x for x in ir.walk(n) if x.op == "var"]
+
+
+def _context(n: Node, types: dict[str, str]) -> str:
+    """``int`` or ``real``: the type a comparison's terms have (Kind 2 converts nothing)."""
+    kinds = set()
+    for x in ir.walk(n):
+        if x.op == "var":
+            kinds.add(types.get(name_of(x), "real"))
+        elif x.op in ("fn", "pre") and x.name in _FN_TYPE:
+            kinds.add(_FN_TYPE[x.name])
+        elif x.op == "num" and not re.fullmatch(r"[0-9]+", name_of(x)):
+            kinds.add("real")
+        elif x.op == "arith" and x.name == "/":
+            kinds.add("real")
+    if len(kinds) > 1:
+        raise CocospecUnsupported(
+            "a comparison mixes integer and real terms; Kind 2 converts no type implicitly "
+            "(declare the variables with one type in the glossary)")
+    return kinds.pop() if kinds else "int"
+
+
+def _number(text: str, kind: str) -> str:
+    try:
+        value = float(text)
+    except ValueError as exc:
+        raise CocospecUnsupported(f"the number {text} has no Lustre literal") from exc
+    if value != value or value in (float("inf"), float("-inf")):
+        raise CocospecUnsupported(f"the number {text} has no Lustre literal")
+    if kind == "int":
+        return text
+    if "e" in text.lower() or "." not in text:
+        from decimal import Decimal
+        out = format(Decimal(text), "f")
+        return out if "." in out else out + ".0"
+    return text if not text.endswith(".") else text + "0"
+
+
+def _term(n: Node, kind: str, names, types, calls: set[str]) -> str:
+    op, a = n.op, n.args
+    if op == "var":
+        return names[name_of(n)]
+    if op == "num":
+        return _number(name_of(n), kind)
+    if op == "neg":
+        return f"(- {_term(a[0], kind, names, types, calls)})"
+    if op == "arith":
+        sym = name_of(n)
+        if sym == "^":
+            raise CocospecUnsupported("Lustre has no power operator (^)")
+        if sym == "mod" and kind != "int":
+            raise CocospecUnsupported("mod of real numbers: Lustre's mod takes integers")
+        return (f"({_term(a[0], kind, names, types, calls)} {sym} "
+                f"{_term(a[1], kind, names, types, calls)})")
+    if op in ("fn", "pre") and n.name in _FN_TYPE:
+        calls.add(name_of(n))
+        args = ", ".join(_term(x, kind, names, types, calls) for x in a)
+        return f"{n.name}({args})"
+    if op == "ite":
+        raise CocospecUnsupported("an if-then-else of numbers (not translated to Lustre)")
+    raise CocospecUnsupported(_refusal(n))
+
+
+def library_text(used: set[str]) -> str:
+    """The Lustre of the library nodes ``used`` names and of the nodes they call, in
+    :data:`LIBRARY`'s order, then ``delay`` and its ``delayN`` nodes when a bounded
+    operator needs them (``delayN`` in ``used``)."""
+    need: set[str] = set()
+    stack = [u for u in used if u in LIBRARY]
+    while stack:
+        name = stack.pop()
+        if name in need:
+            continue
+        need.add(name)
+        stack.extend(d for d in LIBRARY[name][0] if d in LIBRARY)
+    parts = [LIBRARY[name][1] for name in LIBRARY if name in need]
+    if "OT" in need:
+        delays = sorted(int(u[5:]) for u in used if re.fullmatch(r"delay[0-9]+", u))
+        parts.append(_delay_nodes(delays))
+    return "\n\n".join(parts)
+
+
+def _delay_nodes(delays: list[int]) -> str:
+    """``delay(X, R)`` (X R ticks ago, false before tick R) for the ``delays`` used, with one
+    ``delayN`` node per N > 0."""
+    cases = "".join(f"\n       else if R = {d} then delay{d}(X)" for d in delays)
+    out = ["-- delay(X, R): X R ticks ago, false before; R is 0 or one of the file's delays\n"
+           "node delay(X: bool; R: int) returns (Y: bool);\nlet\n"
+           f"  Y = if R = 0 then X{cases}\n       else false;\ntel"]
+    for d in delays:
+        names = [f"X{k}" for k in range(d + 1)]
+        body = "\n".join(f"  X{k} = false -> pre X{k - 1};" for k in range(1, d + 1))
+        out.append(f"node delay{d}(X: bool) returns (Y: bool);\nvar {', '.join(names)}: bool;\n"
+                   f"let\n  X0 = X;\n{body}\n  Y = X{d};\ntel")
+    return "\n\n".join(out)
+
+
+@dataclass
+class Contract:
+    """One component's contract: ``name`` (``<component>Spec``), ``inputs`` and ``outputs``
+    (``[(Lustre name, type)]``), ``internals`` (``[(name, type, Lustre definition)]``),
+    ``guarantees`` (``[(requirement id, text, Lustre expression, assume?)]``), ``used`` (the
+    library nodes called), ``notes`` (comment lines), ``skipped``
+    (``[(requirement id, why)]``)."""
+
+    component: str
+    name: str
+    inputs: list[tuple[str, str]] = field(default_factory=list)
+    outputs: list[tuple[str, str]] = field(default_factory=list)
+    internals: list[tuple[str, str, str]] = field(default_factory=list)
+    guarantees: list[tuple[str, str, str, bool]] = field(default_factory=list)
+    used: set[str] = field(default_factory=set)
+    notes: list[str] = field(default_factory=list)
+    skipped: list[tuple[str, str]] = field(default_factory=list)
+
+
+def contracts(compiled: Sequence[Compiled]) -> list[Contract]:
+    """One :class:`Contract` per component of ``compiled`` (``compiler.build.Compiled``, in
+    input order; components in order of first appearance, FRET's ``<component>Spec``). A
+    requirement that did not parse (its error is the compiler's) or is free-form names no
+    component and is in none."""
+    groups: dict[str, list] = {}
+    for c in compiled:
+        if c.requirement is not None and not c.freeform:  # (no component: no contract)
+            groups.setdefault(component_of(c), []).append(c)
+    return [_contract(comp, items) for comp, items in groups.items()]
+
+
+def component_of(c: Compiled) -> str:
+    """The component of the compiled requirement ``c`` (its sentence's, as FRET groups
+    requirements), ``"component"`` for one without (free-form, not parsed)."""
+    r = c.requirement
+    return (r.component if r is not None and not r.freeform else "") or "component"
+
+
+def declared_variables(items: Sequence[Compiled]) -> tuple[dict[str, str], dict[str, object],
+                                                            list[str], list[str]]:
+    """``(types, FRET variables by name, inputs, outputs)`` the entries of ``items``
+    declare: Lustre types from FRET's glossary (:func:`lustre_type`), the
+    :class:`fretc.fretish.fret_variables.FretVariable` of each name, and the ``@inputs`` /
+    ``@outputs`` (a FRET export: the component's Input and Output variables) in order."""
+    types: dict[str, str] = {}
+    fret: dict[str, object] = {}
+    inputs: list[str] = []
+    outputs: list[str] = []
+    for c in items:
+        for v in c.entry.variables:
+            fret.setdefault(v.name, v)
+            t = lustre_type(v.data_type)
+            if t is not None:
+                types.setdefault(v.name, t)
+        inputs += [x for x in c.entry.inputs if x not in inputs]
+        outputs += [x for x in c.entry.outputs if x not in outputs]
+    return types, fret, inputs, outputs
+
+
+def used_types(items: Sequence[Compiled], types: dict[str, str]) -> None:
+    """Add to ``types`` (variable -> ``bool``/``int``/``real``) the type of each variable the
+    pt formulas of ``items`` read that it has none for (the glossary gives none): ``bool``
+    for a boolean variable, ``real`` for a number (fretc's numbers are reals)."""
+    for c in items:
+        f = c.formalization
+        if f is not None and c.error is None:
+            for x in ir.walk(f.pt):
+                if x.op in ("ap", "var") and name_of(x) not in types:
+                    types[name_of(x)] = "bool" if x.op == "ap" else "real"
+
+
+def _lustre_name(name: str, taken: set[str]) -> str:
+    base = mangle(name)
+    if base in LUSTRE_KEYWORDS or base in LIBRARY or re.fullmatch(r"delay[0-9]*", base):
+        base += "_v"
+    out, k = base, 2
+    while out in taken:
+        out, k = f"{base}_{k}", k + 1
+    taken.add(out)
+    return out
+
+
+def _contract(comp: str, items) -> Contract:
+    out = Contract(comp, _lustre_name(comp + "Spec", set()))
+    types, fret, inputs, outputs = declared_variables(items)
+    taken: set[str] = {out.name}
+    names: dict[str, str] = {}
+    used_types(items, types)
+    for name in inputs + outputs:
+        names[name] = _lustre_name(name, taken)
+    for c in items:
+        f = c.formalization
+        if f is None or c.error is not None:
+            why = "free-form" if c.freeform else "not formalized"
+            out.skipped.append((c.id, why))
+            continue
+        own = {v: _lustre_name(v, set(taken)) for v in ir.variables(f.pt) if v not in names}
+        used: set[str] = set()
+        try:
+            expr = lustre(f.pt, {**names, **own}, types, used)
+        except CocospecUnsupported as exc:
+            out.skipped.append((c.id, str(exc)))
+            continue
+        for v in own:
+            names[v] = _lustre_name(v, taken)
+        expr = lustre(f.pt, names, types, used)
+        out.used |= used
+        out.guarantees.append((c.id, c.text, expr, "assumption" in c.id.lower()))
+    _signature(out, names, types, fret, inputs, outputs)
+    return out
+
+
+def _signature(out: Contract, names, types, fret, inputs, outputs) -> None:
+    """Inputs, outputs and Internal variables of ``out``: the declared ones, every Internal
+    variable of the glossary with a definition (as FRET's export, those a definition reads
+    first), then each variable a guarantee reads that is declared neither way, as an input
+    (with a note)."""
+    out.outputs = [(names[n], types.get(n, "bool")) for n in outputs]
+    out.inputs = [(names[n], types.get(n, "bool")) for n in inputs]
+    defined = {name: v.assignment.strip().rstrip(";") for name, v in fret.items()
+               if getattr(v, "kind", "") == "Internal" and v.assignment.strip()
+               and name not in inputs and name not in outputs}
+    taken = {n for n, _t in out.inputs + out.outputs}
+    for name in _definition_order(defined):
+        lname = names.get(name) or _lustre_name(name, taken)
+        out.internals.append((lname, types.get(name, "bool"), defined[name]))
+    for name, lname in names.items():
+        if name in inputs or name in outputs or name in defined:
+            continue
+        kind = getattr(fret.get(name), "kind", "")
+        out.inputs.append((lname, types.get(name, "bool")))
+        what = f"a FRET {kind} variable" if kind else "declared neither input nor output"
+        out.notes.append(f"{one_line(name)}: {what}; read as an input")
+
+
+def _definition_order(defined: dict[str, str]) -> list[str]:
+    """The names of ``defined`` (name -> Lustre definition) with each after the names its
+    definition reads, otherwise in the glossary's order."""
+    order: list[str] = []
+    state: dict[str, int] = {}
+
+    def visit(name: str) -> None:
+        if state.get(name):
+            return  # done, or on the way (a cycle: left to Kind 2 to report)
+        state[name] = 1
+        for word in re.findall(r"[A-Za-z_][A-Za-z0-9_]*", defined[name]):
+            if word in defined and word != name:
+                visit(word)
+        order.append(name)
+        state[name] = 2
+
+    for name in defined:
+        visit(name)
+    return order
+
+
+def _comment(text: str) -> str:
+    return one_line(text).replace("*)", "* )")
+
+
+def _render(c: Contract, source: str) -> str:
+    lines = [f"-- CoCoSpec contract for Kind 2, written by fretc from {_comment(source)}",
+             "-- (FRET's CoCoSpec export): each guarantee is the requirement's pt formula,",
+             "-- past-time LTL, with FRET's operators as the Lustre nodes below.",
+             f"-- Use it from a node: (*@contract import {c.name}(...) returns (...); *)"]
+    lines += [f"-- note: {_comment(n)}" for n in c.notes]
+    lines += [f"-- not here: {_comment(rid)}: {_comment(why)}" for rid, why in c.skipped]
+    lib = library_text(c.used)
+    if lib:
+        lines += ["", lib]
+    ins = "; ".join(f"{n}: {t}" for n, t in c.inputs) or "lustreC: bool"
+    outs = "; ".join(f"{n}: {t}" for n, t in c.outputs)
+    lines += ["", f"contract {c.name}({ins}) returns ({outs});", "let"]
+    for name, t, definition in c.internals:
+        lines.append(f"  var {name}: {t} = {definition};")
+    for rid, text, expr, assume in c.guarantees:
+        label = rid.replace("\\", "\\\\").replace('"', '\\"')
+        lines.append(f"  (* {_comment(rid)}: {_comment(text)} *)")
+        lines.append(f"  {'assume' if assume else 'guarantee'} \"{label}\" {expr};")
+    lines.append("tel")
+    return "\n".join(lines) + "\n"
+
+
+def emit_cocospec(compiled: Sequence[Compiled]) -> tuple[dict[str, str],
+                                                         list[tuple[str, str, str]]]:
+    """The CoCoSpec files of ``compiled`` (``compiler.build.Compiled`` list): ``({file stem:
+    Lustre text}, [(stem, requirement id, why it is left out)])``, one file per component
+    (stem ``-`` for a free-form requirement, in none),
+    stem ``<component>Spec`` as FRET names it (written as ``STEM.lus``). Same input, same
+    bytes."""
+    out: dict[str, str] = {}
+    skipped = [("-", c.id, "free-form: no formula, no component") for c in compiled
+               if c.freeform]
+    for c in contracts(compiled):
+        sources = dict.fromkeys(x.entry.source for x in compiled
+                                if component_of(x) == c.component)
+        out[c.name] = _render(c, ", ".join(sources) or "(no file)")
+        skipped += [(c.name, rid, why) for rid, why in c.skipped]
+    return out, skipped

@@ -1,0 +1,109 @@
+"""FRET Component Specifications for NASA's Ogma (``fretc FILE --emit ogma``).
+
+Ogma (github.com/nasa/ogma) generates Copilot runtime monitors (cFS, ROS 2, F' applications)
+from the JSON file FRET exports per component with language "CoPilot"
+(``ogma cfs --input-file FILE`` and ``ogma ros --input-file FILE``; older Ogma:
+``--fret-component-spec FILE``). Its shape, as FRET's export template writes it and Ogma's
+``fcs`` input format reads it (``ogma-core/data/formats/fcs_smv``, ``fcs_lustre``: JSONPath
+``..Internal_variables[*]``, ``..Other_variables[*]``, ``..Requirements[*]``)::
+
+    {"<component>Spec": {
+        "Internal_variables": [{"name", "type", "assignmentLustre", "assignmentCopilot"}],
+        "Other_variables": [{"name": "x", "type": "bool" | "int" | "real"}],
+        "Functions": [],
+        "Requirements": [{"name": ID, "fretish": TEXT, "ptLTL": PT, "CoCoSpecCode": LUSTRE,
+                          "PCTL": ""}]}}
+
+Ogma reads ``ptLTL`` by default (``--prop-format smv``; FRET puts its pt formula there) and
+``CoCoSpecCode`` with ``--prop-format lustre``. fretc writes its pt formula as ``fretc FILE
+--emit ltl`` prints it (FRET's syntax, FTP as ``(Z FALSE)``) and the Lustre of
+:mod:`fretc.compiler.cocospec`. Every variable a requirement reads is an entry of
+``Other_variables`` (the component's declared Inputs and Outputs first, types from the
+glossary, else from their use): fretc has no Copilot definition of an Internal variable, so
+none is written as one, and the monitor reads it as an input (said on stderr). Left out,
+with the reason: a requirement that did not formalize, a pt formula that needs the future,
+and one using what Ogma's SMV grammar has no form for (functions, ``mod``, ``^``, unary
+minus, an if-then-else of numbers).
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Sequence
+from typing import TYPE_CHECKING
+
+from fretc.compiler import ir
+from fretc.compiler.cocospec import component_of, contracts, declared_variables, used_types
+from fretc.compiler.ir import name_of
+from fretc.compiler.printers import mangle
+
+if TYPE_CHECKING:
+    from fretc.compiler.build import Compiled
+
+__all__ = ["emit_ogma", "ogma_refusal"]
+
+_NOT_IN_SMV = {"fn": "function ({})", "call": "function ({})", "pre": "function ({})",
+               "neg": "unary minus", "ite": "an if-then-else of numbers",
+               "future": "future-time function ({}): the pt formula needs the future"}
+
+
+def ogma_refusal(pt: ir.Node) -> str | None:
+    """Why Ogma's SMV expression grammar (``ogma-language-smv``'s ``SMV.cf``) cannot read
+    the pt formula ``pt``, or None when it can."""
+    for x in ir.walk(pt):
+        if x.op in _NOT_IN_SMV:
+            return "Ogma's SMV grammar has no " + _NOT_IN_SMV[x.op].format(x.name)
+        if x.op == "arith" and x.name in ("mod", "^"):
+            return f"Ogma's SMV grammar has no {x.name} operator"
+    return None
+
+
+def emit_ogma(compiled: Sequence[Compiled]) -> tuple[dict[str, str],
+                                                     list[tuple[str, str, str]],
+                                                     list[str]]:
+    """Ogma's component specifications of ``compiled`` (``compiler.build.Compiled`` list):
+    ``({file stem: JSON text}, [(stem, requirement id, why left out)], [notes])``, one file
+    per component, stem ``<component>Spec`` as FRET names it (written as ``STEM.json``);
+    the notes name the variables written as inputs that the glossary declares otherwise.
+    Same input, same bytes."""
+    out: dict[str, str] = {}
+    skipped: list[tuple[str, str, str]] = []
+    notes: list[str] = [f"{c.id}: free-form, no formula and no component: left out"
+                        for c in compiled if c.freeform]
+    for contract in contracts(compiled):
+        items = [c for c in compiled if c.requirement is not None and not c.freeform
+                 and component_of(c) == contract.component]
+        types, fret, inputs, outputs = declared_variables(items)
+        used_types(items, types)
+        reqs, variables = [], {}
+        for name in inputs + outputs:
+            variables[name] = types.get(name)
+        lustre_of = {rid: expr for rid, _t, expr, _a in contract.guarantees}
+        for c in items:
+            f = c.formalization
+            if f is None or c.error is not None:
+                skipped.append((contract.name, c.id,
+                                "free-form" if c.freeform else "not formalized"))
+                continue
+            why = ogma_refusal(f.pt)
+            if why is not None:
+                skipped.append((contract.name, c.id, why))
+                continue
+            for x in ir.walk(f.pt):
+                if x.op in ("ap", "var") and variables.get(name_of(x)) is None:
+                    variables[name_of(x)] = types[name_of(x)]
+            reqs.append({"name": c.id, "fretish": c.text, "ptLTL": c.smv_text["pt"],
+                         "CoCoSpecCode": lustre_of.get(c.id, ""), "PCTL": ""})
+        for name in variables:
+            kind = getattr(fret.get(name), "kind", "")
+            if name not in inputs and name not in outputs and kind not in ("", "Input",
+                                                                           "Output"):
+                notes.append(f"{contract.name}: {name} (a FRET {kind} variable) is an "
+                             "Other_variables entry: the monitor reads it as an input")
+        spec = {"Internal_variables": [],
+                "Other_variables": [{"name": mangle(n), "type": t or "bool"}
+                                    for n, t in variables.items()],
+                "Functions": [], "Requirements": reqs}
+        out[contract.name] = json.dumps({contract.name: spec}, indent=2) + "\n"
+    return out, skipped, notes
+

@@ -1,0 +1,303 @@
+"""``fretc --emit cocospec``: Kind 2 itself does not install here (neither PyPI nor Debian has
+it), so each contract is read back by the tests' own Lustre-subset reader and interpreter
+(``tests/_lustre_subset.py``): the text is well formed (nodes and one contract, each
+``let`` closed by ``tel``), every name a guarantee reads is declared and every node it calls
+defined, and -- the differential -- the guarantee's stream, computed from the emitted Lustre
+nodes, equals fretc's reference evaluator (``compiler/evaluate.py``'s ``series``) of the same
+pt formula at every tick of random traces; on FRET's case studies it also equals the stream
+of FRET's own ``CoCoSpecCode``. What Lustre cannot say is left out with the reason."""
+
+from __future__ import annotations
+
+import json
+import random
+import re
+import sys
+from pathlib import Path
+
+import pytest
+from click.testing import CliRunner
+from hypothesis import given, settings, strategies as st
+
+from fretc.cli import main
+from fretc.compiler import ir
+from fretc.compiler.build import compile_entries
+from fretc.compiler.cocospec import LIBRARY, emit_cocospec, library_text, lustre
+from fretc.compiler.evaluate import series
+from fretc.fretish.files import load_requirements
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+import _lustre_subset as lus  # noqa: E402
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+def _formulas() -> st.SearchStrategy:
+    leaves = st.sampled_from([ir.ap("p"), ir.ap("q"), ir.TRUE, ir.FALSE, ir.FTP,
+                              ir.cmp(">", ir.var("x"), ir.num("2")),
+                              ir.cmp("<=", ir.arith("+", ir.var("x"), ir.num("1.5")),
+                                     ir.num("3"))])
+    window = st.tuples(st.integers(0, 4), st.integers(0, 4)).map(sorted)
+
+    def grow(sub):
+        unary = st.sampled_from(["!", "Y", "Z", "O", "H"])
+        binary = st.sampled_from(["&", "|", "->", "<->", "xor", "S", "T"])
+        return st.one_of(
+            st.builds(lambda op, a: ir.Node(op, (a,)), unary, sub),
+            st.builds(lambda op, a, b: ir.Node(op, (a, b)), binary, sub, sub),
+            st.builds(lambda op, w, a: ir.Node(op, (a,), lo=w[0], hi=w[1]),
+                      st.sampled_from(["O", "H"]), window, sub))
+
+    return st.recursive(leaves, grow, max_leaves=8)
+
+
+def _trace(rng: random.Random, n: int) -> list[dict]:
+    return [{"p": rng.random() < 0.5, "q": rng.random() < 0.5, "x": rng.choice([0, 1, 2, 3])}
+            for _ in range(n)]
+
+
+def _contract_text(formula: ir.Node) -> str:
+    used: set[str] = set()
+    expr = lustre(formula, {"p": "p", "q": "q", "x": "x"}, {"x": "real"}, used)
+    return (library_text(used) + "\ncontract C(p, q: bool; x: real) returns ();\n"
+            f"let\n  guarantee \"g\" {expr};\ntel\n")
+
+
+@settings(max_examples=150, deadline=None, derandomize=True)
+@given(_formulas(), st.integers(0, 2 ** 32 - 1))
+def test_the_lustre_nodes_compute_the_pt_formula_at_every_tick(formula, seed):
+    """Differential: the emitted Lustre (fretc's operator nodes included) interpreted tick by
+    tick equals the reference evaluator of the same pt formula."""
+    program = lus.read(_contract_text(formula))
+    trace = _trace(random.Random(seed), 14)
+    got = lus.run_contract(program, "C", trace)["\"g\""]
+    assert got == [bool(v) for v in series(formula, trace)]
+
+
+def test_every_operator_node_is_exercised_and_defined():
+    """Each of FRET's operators is reached by a formula of its own, and the library holds
+    exactly the nodes the text calls (with those they call)."""
+    p, q = ir.ap("p"), ir.ap("q")
+    cases = {"YtoPre": ir.Y(p), "ZtoPre": ir.Z(p), "H": ir.H(p), "O": ir.O(p),
+             "S": ir.S(p, q), "T": ir.T(p, q), "OT": ir.O(p, 2, 3), "HT": ir.H(p, 0, 2)}
+    for name, f in cases.items():
+        text = _contract_text(f)
+        program = lus.read(text)
+        assert name in program, (name, text)
+        calls = {t for k, t in lus.tokens(text.split("contract C")[1]) if k == "id"}
+        assert name in calls
+    assert "delay3" not in lus.read(_contract_text(ir.O(p, 0, 3)))
+    assert "delay2" in lus.read(_contract_text(ir.O(p, 2, 3)))
+
+
+def _compiled(paths):
+    return compile_entries(load_requirements([str(x) for x in paths]))
+
+
+def _check_structure(text: str) -> dict:
+    """The file reads as nodes and one contract; every name a guarantee or ghost reads is a
+    parameter or ghost of the contract; every node called is defined."""
+    program = lus.read(text)
+    contracts = [n for n in program.values() if n.kind == "contract"]
+    assert len(contracts) == 1
+    c = contracts[0]
+    declared = {v for v, _t in c.params + c.returns} | set(c.eqs)
+    for _kind, label, e in c.props:
+        for name in _names(e):
+            assert name in declared, (label, name)
+    for node in program.values():
+        for e in node.eqs.values():
+            for call in _calls(e):
+                assert call in program and program[call].kind == "node", call
+    return program
+
+
+def _walk(e):
+    if isinstance(e, tuple):
+        yield e
+        for x in e[1:]:
+            if isinstance(x, tuple):
+                yield from _walk(x)
+
+
+def _names(e):
+    return {x[1] for x in _walk(e) if x[0] == "id"}
+
+
+def _calls(e):
+    return {x[1] for x in _walk(e) if x[0] == "call"}
+
+
+def test_safe_ros_contracts_read_back_and_decide_as_the_evaluator(tmp_path):
+    """The shipped requirements: one contract per component, well formed, each guarantee's
+    stream the reference evaluator's on random traces."""
+    compiled = _compiled([ROOT / "requirements/safe_ros.fret", ROOT / "requirements/r1.fret"])
+    files, skipped = emit_cocospec(compiled)
+    assert sorted(files) == ["agilex_agentSpec", "cmd_vel_interceptorSpec",
+                             "safety_systemSpec", "scout_miniSpec"]
+    assert skipped == []
+    rng = random.Random(7)
+    by_id = {c.id: c for c in compiled}
+    for stem, text in files.items():
+        program = _check_structure(text)
+        c = program[stem]
+        for _ in range(20):
+            trace = [{v: (rng.random() < 0.5 if t == "bool" else rng.choice([0.0, 0.4, 0.6]))
+                      for v, t in c.params} for _ in range(40)]
+            got = lus.run_contract(program, stem, trace)
+            for label, values in got.items():
+                pt = by_id[label.strip('"')].formalization.pt
+                assert values == [bool(v) for v in series(pt, trace)], (stem, label)
+
+
+def test_what_lustre_cannot_say_is_left_out_with_the_reason(tmp_path):
+    src = tmp_path / "r.fret"
+    src.write_text("@inputs a\n@outputs b, n\n"
+                   "A1: the c shall always satisfy b\n"
+                   "A2: the c shall always satisfy n ^ 2 > 3\n"
+                   "A3: the c shall always satisfy f(n) > 1\n")
+    files, skipped = emit_cocospec(_compiled([src]))
+    assert [(rid, why.split(" ")[0]) for _s, rid, why in skipped] == [
+        ("A2", "Lustre"), ("A3", "the")]
+    assert "power" in skipped[0][2] and "f has no Lustre node" in skipped[1][2]
+    text = files["cSpec"]
+    assert "-- not here: A2" in text and 'guarantee "A1" H(b);' in text
+    program = _check_structure(text)
+    assert program["cSpec"].params == [("a", "bool")]
+    assert program["cSpec"].returns == [("b", "bool"), ("n", "real")]
+
+
+def test_numbers_print_in_their_context_type_and_mixing_is_refused(tmp_path):
+    src = tmp_path / "r.fret"
+    src.write_text("R1: the c shall always satisfy x > 3 & y <= 1e2\n")
+    files, skipped = emit_cocospec(_compiled([src]))
+    assert skipped == []
+    assert "(x > 3.0)" in files["cSpec"] and "(y <= 100.0)" in files["cSpec"]
+
+
+def test_the_cli_writes_one_file_per_component_and_refuses_outputs_over_inputs(tmp_path):
+    runner = CliRunner()
+    out = tmp_path / "out"
+    r = runner.invoke(main, ["requirements/safe_ros.fret", "--emit", "cocospec", "-o",
+                             str(out)])
+    assert r.exit_code == 0, r.output
+    assert sorted(p.name for p in out.iterdir()) == [
+        "agilex_agentSpec.lus", "cmd_vel_interceptorSpec.lus", "safety_systemSpec.lus",
+        "scout_miniSpec.lus"]
+    first = (out / "scout_miniSpec.lus").read_bytes()
+    r = runner.invoke(main, ["requirements/safe_ros.fret", "--emit", "cocospec", "-o",
+                             str(out)])
+    assert (out / "scout_miniSpec.lus").read_bytes() == first  # same input, same bytes
+    src = tmp_path / "scout_miniSpec.lus"
+    src.write_text("R5: the scout_mini shall always satisfy clearance > 0\n")
+    r = runner.invoke(main, [str(src), "--emit", "cocospec", "-o", str(tmp_path)])
+    assert r.exit_code == 2 and "scout_miniSpec.lus" in r.output
+    assert src.read_text().startswith("R5:")  # the input is not overwritten
+
+
+def test_a_requirement_left_out_is_named_on_stderr(tmp_path):
+    src = tmp_path / "r.fret"
+    src.write_text("A2: the c shall always satisfy n ^ 2 > 3\n")
+    r = CliRunner().invoke(main, [str(src), "--emit", "cocospec"])
+    assert r.exit_code == 0
+    assert "skipped A2 (cSpec.lus): Lustre has no power operator" in r.output
+
+
+_FRET_EXTRA = """
+node SI(X, Y: bool) returns (Z: bool);
+let
+  Z = Y and (X or (false -> pre Z));
+tel
+node ST(L: int; R: int; X: bool; Y: bool) returns (Z: bool);
+let
+  Z = S(X, Y) and OT(L, R, X);
+tel
+node SIT(L: int; R: int; X: bool; Y: bool) returns (Z: bool);
+let
+  Z = SI(X, Y) and OT(L, R, X);
+tel
+"""
+
+
+def _fret_cases(shared: Path):
+    for path in sorted((shared / "corpora/fret_projects").glob("*/*.json")):
+        data = json.loads(path.read_text())
+        reqs = data["requirements"] if isinstance(data, dict) else data
+        yield path, {r["reqid"]: r["semantics"].get("CoCoSpecCode") for r in reqs
+                     if isinstance(r.get("semantics"), dict)}
+
+
+def test_fret_case_studies_agree_with_frets_own_cocospec_code(shared):
+    """On FRET's case studies, each guarantee fretc writes and FRET's own ``CoCoSpecCode`` of
+    the requirement (read with the same interpreter; FRET's ``SI``/``ST``/``SIT`` added as
+    FRET defines them, its bare ``FTP`` as the first tick) give the same stream on random traces of the contract's variables."""
+    rng = random.Random(3)
+    compared = 0
+    for path, fret_code in _fret_cases(shared):
+        files, _skipped = emit_cocospec(_compiled([path]))
+        for stem, text in files.items():
+            program = _check_structure(text)
+            contract = program[stem]
+            kinds = dict(contract.params + contract.returns + contract.locals)
+            for _kind, label, _expr in contract.props:
+                code = fret_code.get(label.strip('"'))
+                if not code or "$" in code:
+                    continue
+                delays = {f"delay{m}" for m in re.findall(r"T\(\d+, *(\d+)", code)
+                          if m != "0"}
+                mine = lus.read(library_text(set(LIBRARY) | delays) + _FRET_EXTRA
+                                + f"contract F_({_params(kinds)}) returns ();\n"
+                                "let\n  var FTP: bool = true -> false;\n"
+                                f"  guarantee \"f\" {code};\ntel\n")
+                names = {x[1] for x in _walk(mine["F_"].props[0][2]) if x[0] == "id"}
+                if not names <= set(kinds) | {"FTP"}:
+                    continue  # FRET's formula reads a name fretc writes otherwise
+                for _ in range(5):
+                    trace = [{v: _value(rng, t) for v, t in kinds.items()} for _ in range(12)]
+                    ours = lus.run_contract(_only(program, stem, label), stem, trace)[label]
+                    theirs = lus.run_contract(mine, "F_", trace)['"f"']
+                    assert ours == theirs, (path.name, label, code)
+                compared += 1
+    assert compared >= 100, compared
+
+
+def _params(kinds: dict) -> str:
+    return "; ".join(f"{v}: {t}" for v, t in kinds.items()) or "lustreC: bool"
+
+
+def _value(rng: random.Random, ty: str):
+    if ty == "bool":
+        return rng.random() < 0.5
+    return rng.choice([0, 1, 2, 3, 4]) if ty == "int" else rng.choice([0.0, 1.0, 2.5, 4.0])
+
+
+def _only(program: dict, stem: str, label: str) -> dict:
+    """``program`` with contract ``stem`` reduced to its property ``label``, its ghost
+    variables read as inputs (as FRET's formula reads them)."""
+    c = program[stem]
+    one = lus.Node(c.name, c.kind, c.params + c.locals, c.returns, [], {},
+                   [p for p in c.props if p[1] == label])
+    return {**program, stem: one}
+
+
+@pytest.mark.parametrize("name", ["H", "O", "S", "T", "YtoPre", "ZtoPre", "OT", "HT"])
+def test_fret_operator_names_and_argument_orders(name):
+    """FRET's CoCoSpec names and orders: ``a S b`` is ``S(b, a)``, ``O[l,h]`` is
+    ``OT(h, l, _)``."""
+    p, q = ir.ap("p"), ir.ap("q")
+    f = {"H": ir.H(p), "O": ir.O(p), "S": ir.S(p, q), "T": ir.T(p, q), "YtoPre": ir.Y(p),
+         "ZtoPre": ir.Z(p), "OT": ir.O(p, 1, 3), "HT": ir.H(p, 1, 3)}[name]
+    text = lustre(f, {"p": "p", "q": "q"}, {})
+    assert text == {"H": "H(p)", "O": "O(p)", "S": "S(q, p)", "T": "T(q, p)",
+                    "YtoPre": "YtoPre(p)", "ZtoPre": "ZtoPre(p)", "OT": "OT(3, 1, p)",
+                    "HT": "HT(3, 1, p)"}[name]
+
+
+def test_a_free_form_requirement_is_in_no_contract(tmp_path):
+    src = tmp_path / "r.fret"
+    src.write_text('F1: "just words"\nR1: the c shall always satisfy b\n')
+    files, skipped = emit_cocospec(_compiled([src]))
+    assert list(files) == ["cSpec"] and skipped == [("-", "F1", "free-form: no formula, "
+                                                     "no component")]
+    r = CliRunner().invoke(main, [str(src), "--emit", "cocospec"])
+    assert "skipped F1: free-form" in r.output and 'guarantee "R1" H(b);' in r.output

@@ -1,0 +1,165 @@
+"""``fretc --emit ogma``: Ogma itself does not install here (a Haskell tool, on neither PyPI
+nor Debian), so each file is read back as Ogma's ``fcs`` input format reads it (its JSONPath
+queries ``..Internal_variables[*]``, ``..Other_variables[*]``, ``..Requirements[*]``, each
+field found exactly once and a string), each requirement's ``ptLTL`` is the pt formula
+``fretc FILE --emit ltl --json`` prints, its tokens all in Ogma's SMV grammar, and each
+variable's type is the glossary's (FRET's ``bool``/``int``/``real``) or its use's."""
+
+from __future__ import annotations
+
+import json
+import re
+from pathlib import Path
+
+from click.testing import CliRunner
+
+from fretc.cli import main
+from fretc.compiler.build import compile_entries
+from fretc.compiler.cocospec import lustre_type
+from fretc.compiler.ogma import emit_ogma
+from fretc.fretish.files import load_requirements
+
+ROOT = Path(__file__).resolve().parents[2]
+
+#: the tokens of Ogma's SMV expression grammar (ogma-language-smv, SMV.cf)
+_SMV_TOKEN = re.compile(r"\s*(<->|->|<=|>=|!=|[()\[\],!&|<>=+\-*/]|xor|TRUE|FALSE|FTP|LAST"
+                        r"|[XGFYZHOSTVU](?![A-Za-z0-9_'])|[0-9]+\.[0-9]+|[0-9]+"
+                        r"|[A-Za-z][A-Za-z0-9_']*)")
+
+
+def _descend(value, key):
+    """JSONPath ``..key[*]``: the elements of every ``key`` array anywhere in ``value``,
+    and how many such arrays there are."""
+    found = []
+    if isinstance(value, dict):
+        for k, v in value.items():
+            if k == key and isinstance(v, list):
+                found.append(v)
+            else:
+                found += _descend(v, key)
+    elif isinstance(value, list):
+        for v in value:
+            found += _descend(v, key)
+    return found
+
+
+def _ogma_reads(text: str) -> dict:
+    """What Ogma's ``fcs`` format reads of ``text``: ``{"internal": [...], "external":
+    [(name, type)], "requirements": [(name, fretish, ptLTL, CoCoSpecCode)]}``; an
+    ``AssertionError`` where Ogma's reader would fail."""
+    doc = json.loads(text)
+    arrays = {k: _descend(doc, k) for k in ("Internal_variables", "Other_variables",
+                                            "Requirements")}
+    for k, lists in arrays.items():
+        assert len(lists) == 1, k  # one component per file
+
+    def field(obj, key):
+        assert isinstance(obj.get(key), str), (key, obj)
+        return obj[key]
+
+    return {"internal": arrays["Internal_variables"][0],
+            "external": [(field(v, "name"), field(v, "type"))
+                         for v in arrays["Other_variables"][0]],
+            "requirements": [(field(r, "name"), field(r, "fretish"), field(r, "ptLTL"),
+                              field(r, "CoCoSpecCode"))
+                             for r in arrays["Requirements"][0]]}
+
+
+def _smv_tokens_ok(text: str) -> bool:
+    i = 0
+    while i < len(text.rstrip()):
+        m = _SMV_TOKEN.match(text, i)
+        if m is None:
+            return False
+        i = m.end()
+    return True
+
+
+def _ltl_pt(paths) -> dict:
+    r = CliRunner().invoke(main, [str(p) for p in paths] + ["--emit", "ltl", "--json"])
+    return {x["id"]: x.get("pt") for x in json.loads(r.stdout)}
+
+
+def _compiled(paths):
+    return compile_entries(load_requirements([str(x) for x in paths]))
+
+
+def test_safe_ros_components_as_ogma_reads_them():
+    paths = [ROOT / "requirements/safe_ros.fret", ROOT / "requirements/r1.fret"]
+    files, skipped, notes = emit_ogma(_compiled(paths))
+    assert skipped == [] and notes == []
+    assert sorted(files) == ["agilex_agentSpec", "cmd_vel_interceptorSpec",
+                             "safety_systemSpec", "scout_miniSpec"]
+    pts = _ltl_pt(paths)
+    seen = set()
+    for stem, text in files.items():
+        assert list(json.loads(text)) == [stem]
+        got = _ogma_reads(text)
+        assert got["internal"] == []
+        for name, _fretish, pt, coco in got["requirements"]:
+            assert pt == pts[name] and _smv_tokens_ok(pt), (name, pt)
+            assert coco.startswith("H(") or coco.startswith("(H(")
+            seen.add(name)
+        if stem == "scout_miniSpec":
+            assert got["external"] == [("linear_speed", "real"), ("angular_speed", "real"),
+                                       ("clearance", "real")]
+        if stem == "agilex_agentSpec":
+            assert got["external"] == [("too_close", "bool"), ("stopped", "bool")]
+    assert seen == set(pts)
+
+
+def test_what_ogma_cannot_read_is_left_out_with_the_reason(tmp_path):
+    src = tmp_path / "r.fret"
+    src.write_text("@inputs a, n\n@outputs b\nA1: the c shall always satisfy b | a\n"
+                   "A2: the c shall always satisfy absReal(n) > 3\n"
+                   "A3: the c shall always satisfy n mod 2 = 1\n")
+    r = CliRunner().invoke(main, [str(src), "--emit", "ogma"])
+    assert r.exit_code == 0, r.output
+    assert "skipped A2 (cSpec.json): Ogma's SMV grammar has no function (absReal)" in r.output
+    assert "skipped A3 (cSpec.json): Ogma's SMV grammar has no mod operator" in r.output
+    got = _ogma_reads(r.stdout)
+    assert [x[0] for x in got["requirements"]] == ["A1"]
+    assert got["external"] == [("a", "bool"), ("n", "real"), ("b", "bool")]
+
+
+def test_the_cli_writes_json_files_and_refuses_an_output_over_an_input(tmp_path):
+    runner = CliRunner()
+    out = tmp_path / "o"
+    r = runner.invoke(main, ["requirements/safe_ros.fret", "--emit", "ogma", "-o", str(out)])
+    assert r.exit_code == 0, r.output
+    assert (out / "scout_miniSpec.json").is_file()
+    before = (out / "scout_miniSpec.json").read_bytes()
+    runner.invoke(main, ["requirements/safe_ros.fret", "--emit", "ogma", "-o", str(out)])
+    assert (out / "scout_miniSpec.json").read_bytes() == before
+    r = runner.invoke(main, ["requirements/safe_ros.fret", "--emit", "ogma", "-o",
+                             str(tmp_path / "x.json")])
+    assert r.exit_code == 2  # several components: -o FILE.json is refused
+    src = tmp_path / "cSpec.json"
+    src.write_text(json.dumps([{"reqid": "A", "fulltext": "the c shall always satisfy b"}]))
+    r = runner.invoke(main, [str(src), "--emit", "ogma", "-o", str(tmp_path)])
+    assert r.exit_code == 2 and json.loads(src.read_text())[0]["reqid"] == "A"
+
+
+def test_fret_case_studies_as_ogma_reads_them(shared):
+    """Every component of FRET's case studies: the file reads as Ogma reads it, each
+    ptLTL is fretc's pt formula and in Ogma's SMV tokens, each declared Input and Output
+    has the glossary's type as FRET's export maps it."""
+    checked = 0
+    for path in sorted((shared / "corpora/fret_projects").glob("*/*.json")):
+        data = json.loads(path.read_text())
+        glossary = {(v["component_name"], v["variable_name"]): v.get("dataType", "")
+                    for v in data.get("variables", []) if isinstance(v, dict)
+                    and "variable_name" in v and v.get("idType") in ("Input", "Output")}
+        files, _skipped, _notes = emit_ogma(_compiled([path]))
+        pts = _ltl_pt([path])
+        for stem, text in files.items():
+            got = _ogma_reads(text)
+            component = stem[:-len("Spec")]
+            for name, typ in got["external"]:
+                declared = glossary.get((component, name))
+                if declared:
+                    assert typ == lustre_type(declared), (stem, name, declared, typ)
+            for name, _text, pt, _coco in got["requirements"]:
+                assert pt == pts[name] and _smv_tokens_ok(pt), (path.name, name)
+                checked += 1
+    assert checked >= 150, checked
