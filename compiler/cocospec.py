@@ -26,10 +26,12 @@ The translation (FRET's names and argument orders, so a contract reads as FRET's
 * ``absReal``, ``maxReal`` ... and ``preBool``/``preInt``/``preReal`` as FRET's library
   nodes of those names.
 
-Kind 2 converts no type implicitly: a number prints as its context's type (``3.0`` beside a
-real); a term that mixes integer and real variables, ``/`` of integers, ``^`` (Lustre has no
-power), uninterpreted functions, an if-then-else of numbers and a pt formula that needs the
-future are refused, the requirement left out with the reason. The library is fretc's own
+Kind 2 converts no type implicitly (its parser: ``real e`` and ``int e`` convert): a number
+prints as its context's type (``3.0`` beside a real), an integer term beside a real one is
+converted with ``real``, and ``/`` is the reals' division (FRET's; Lustre's ``div`` of
+integers is another). ``^`` (Lustre has no power), ``mod`` of reals, an integer function
+(``absInt``) of a real, uninterpreted functions, an if-then-else of numbers and a pt formula
+that needs the future are refused, the requirement left out with the reason. The library is fretc's own
 Lustre; each node's meaning is tested against fretc's reference evaluator
 (``tests/compiler/test_cocospec.py``).
 """
@@ -214,9 +216,7 @@ def _formula(n: Node, go, names, types, calls: set[str]) -> str:
     if op in _BOOL_BIN:
         return f"({go(a[0])} {_BOOL_BIN[op]} {go(a[1])})"
     if op == "cmp":
-        kind = _context(n, types)
-        return (f"({_term(a[0], kind, names, types, calls)} {_CMP[name_of(n)]} "
-                f"{_term(a[1], kind, names, types, calls)})")
+        return _cmp_text(n, names, types, calls)
     if op == "pre" and n.name == "preBool":
         calls.add("preBool")
         return f"preBool({go(a[0])}, {go(a[1])})"
@@ -249,30 +249,8 @@ def _refusal(n: Node) -> str:
     return f"Lustre has no form of {op!r} here"
 
 
-def _vars_of(n: Node) -> list[Node]:
-    return [x for x in ir.walk(n) if x.op == "var"]
-
-
-def _context(n: Node, types: dict[str, str]) -> str:
-    """``int`` or ``real``: the type a comparison's terms have (Kind 2 converts nothing)."""
-    kinds = set()
-    for x in ir.walk(n):
-        if x.op == "var":
-            kinds.add(types.get(name_of(x), "real"))
-        elif x.op in ("fn", "pre") and x.name in _FN_TYPE:
-            kinds.add(_FN_TYPE[x.name])
-        elif x.op == "num" and not re.fullmatch(r"[0-9]+", name_of(x)):
-            kinds.add("real")
-        elif x.op == "arith" and x.name == "/":
-            kinds.add("real")
-    if len(kinds) > 1:
-        raise CocospecUnsupported(
-            "a comparison mixes integer and real terms; Kind 2 converts no type implicitly "
-            "(declare the variables with one type in the glossary)")
-    return kinds.pop() if kinds else "int"
-
-
 def _number(text: str, kind: str) -> str:
+    """The Lustre literal of the number ``text`` as an ``int`` or a ``real``."""
     try:
         value = float(text)
     except ValueError as exc:
@@ -281,36 +259,81 @@ def _number(text: str, kind: str) -> str:
         raise CocospecUnsupported(f"the number {text} has no Lustre literal")
     if kind == "int":
         return text
-    if "e" in text.lower() or "." not in text:
-        from decimal import Decimal
-        out = format(Decimal(text), "f")
-        return out if "." in out else out + ".0"
-    return text if not text.endswith(".") else text + "0"
+    from decimal import Decimal
+    out = format(Decimal(text), "f")
+    return out if "." in out else out + ".0"
 
 
-def _term(n: Node, kind: str, names, types, calls: set[str]) -> str:
+#: a term's Lustre type (``int``, ``real``; None: an integer literal, either) and its text
+#: in a given type
+_Typed = tuple
+
+
+def _cmp_text(n: Node, names, types, calls: set[str]) -> str:
+    """A comparison of two terms, both in one type: ``real`` when either is real (an
+    integer term then converted by Kind 2's ``real``), else ``int``."""
+    left = _typed(n.args[0], names, types, calls)
+    right = _typed(n.args[1], names, types, calls)
+    kind = "real" if "real" in (left[0], right[0]) else "int"
+    return f"({left[1](kind)} {_CMP[name_of(n)]} {right[1](kind)})"
+
+
+def _as(kind_of: str | None, text: str):
+    """The text-in-a-type function of a term of type ``kind_of`` written ``text``."""
+    def render(kind: str) -> str:
+        if kind_of == kind:
+            return text
+        if kind_of == "int" and kind == "real":
+            return f"(real {text})"
+        raise CocospecUnsupported(f"a real term ({text}) where Lustre needs an integer")
+    return render
+
+
+def _typed(n: Node, names, types, calls: set[str]) -> _Typed:
+    """``(type, render)`` of the term ``n`` (:data:`_Typed`). Raises
+    :class:`CocospecUnsupported`."""
     op, a = n.op, n.args
     if op == "var":
-        return names[name_of(n)]
+        return _typed_leaf(types.get(name_of(n), "real"), names[name_of(n)])
     if op == "num":
-        return _number(name_of(n), kind)
+        text = name_of(n)
+        if re.fullmatch(r"[0-9]+", text):
+            return None, lambda kind: _number(text, kind)
+        return "real", _as("real", _number(text, "real"))
     if op == "neg":
-        return f"(- {_term(a[0], kind, names, types, calls)})"
+        kind, render = _typed(a[0], names, types, calls)
+        return kind, lambda k: f"(- {render(k)})"
     if op == "arith":
-        sym = name_of(n)
-        if sym == "^":
-            raise CocospecUnsupported("Lustre has no power operator (^)")
-        if sym == "mod" and kind != "int":
-            raise CocospecUnsupported("mod of real numbers: Lustre's mod takes integers")
-        return (f"({_term(a[0], kind, names, types, calls)} {sym} "
-                f"{_term(a[1], kind, names, types, calls)})")
+        return _typed_arith(n, names, types, calls)
     if op in ("fn", "pre") and n.name in _FN_TYPE:
         calls.add(name_of(n))
-        args = ", ".join(_term(x, kind, names, types, calls) for x in a)
-        return f"{n.name}({args})"
+        result = _FN_TYPE[name_of(n)]
+        args = [_typed(x, names, types, calls)[1](result) for x in a]
+        return _typed_leaf(result, f"{n.name}({', '.join(args)})")
     if op == "ite":
         raise CocospecUnsupported("an if-then-else of numbers (not translated to Lustre)")
     raise CocospecUnsupported(_refusal(n))
+
+
+def _typed_leaf(kind: str, text: str) -> _Typed:
+    return kind, _as(kind, text)
+
+
+def _typed_arith(n: Node, names, types, calls: set[str]) -> _Typed:
+    sym = name_of(n)
+    if sym == "^":
+        raise CocospecUnsupported("Lustre has no power operator (^)")
+    (ka, ra), (kb, rb) = (_typed(x, names, types, calls) for x in n.args)
+    if sym == "mod":
+        if "real" in (ka, kb):
+            raise CocospecUnsupported("mod of real numbers: Lustre's mod takes integers")
+        return "int", _as("int", f"({ra('int')} mod {rb('int')})")
+    if sym == "/":  # FRET's division is the reals' (Lustre's / of reals; div is another)
+        return "real", _as("real", f"({ra('real')} / {rb('real')})")
+    kind = "real" if "real" in (ka, kb) else ("int" if "int" in (ka, kb) else None)
+    if kind is None:
+        return None, lambda k: f"({ra(k)} {sym} {rb(k)})"
+    return kind, lambda k: _as(kind, f"({ra(kind)} {sym} {rb(kind)})")(k)
 
 
 def library_text(used: set[str]) -> str:
@@ -514,6 +537,10 @@ def _render(c: Contract, source: str) -> str:
              f"-- Use it from a node: (*@contract import {c.name}(...) returns (...); *)"]
     lines += [f"-- note: {_comment(n)}" for n in c.notes]
     lines += [f"-- not here: {_comment(rid)}: {_comment(why)}" for rid, why in c.skipped]
+    if not c.guarantees and not c.internals:  # (Kind 2: a contract holds at least one item)
+        lines.append(f"-- no contract: none of {_comment(c.component)}'s requirements could "
+                     "be written")
+        return "\n".join(lines) + "\n"
     lib = library_text(c.used)
     if lib:
         lines += ["", lib]

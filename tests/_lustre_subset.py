@@ -3,7 +3,8 @@
 ``fretc.compiler.cocospec``: ``node``s (parameters, ``var`` locals, equations), Kind 2
 ``contract`` nodes (``var`` ghosts, ``guarantee``/``assume``), expressions with ``->``,
 ``pre``, ``if then else``, ``not and or xor =>``, comparisons, ``+ - * / div mod``, unary
-minus and node calls, read with Kind 2's precedences (lowest first: ``if``, ``->``, ``=>``,
+minus, Kind 2's conversions ``real e`` and ``int e``, and node calls, read with Kind 2's
+precedences (lowest first: ``if``, ``->``, ``=>``,
 ``or xor``, ``and``, comparisons, ``+ -``, ``* / div mod``, ``not``, ``pre``, unary minus).
 
 Semantics (Lustre's): a stream per expression; ``a -> b`` is ``a`` at the first tick and
@@ -113,6 +114,8 @@ class Reader:
                     n.locals += self.group()
                     self.expect(";")
             self.expect("let")
+            if n.kind == "contract" and self.peek() == "tel":
+                raise SyntaxError(f"contract {n.name} is empty (Kind 2 wants one item)")
             while self.peek() != "tel":
                 self.item(n)
             self.expect("tel")
@@ -190,6 +193,8 @@ class Reader:
             return ("not", self.expr(75))
         if word == "pre":
             return ("pre", self.expr(80))
+        if word in ("real", "int"):  # Kind 2's conversions
+            return ("conv", word, self.expr(78))
         if word == "-":
             return ("neg", self.expr(85))
         if word == "(":
@@ -288,6 +293,9 @@ class Instance:
         if tag == "neg":
             v = self.eval(e[1], t)
             return None if v is None else -v
+        if tag == "conv":
+            v = self.eval(e[2], t)
+            return None if v is None else (float(v) if e[1] == "real" else int(v))
         if tag == "if":
             c = self.eval(e[1], t)
             return None if c is None else self.eval(e[2] if c else e[3], t)

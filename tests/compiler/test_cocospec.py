@@ -36,7 +36,11 @@ def _formulas() -> st.SearchStrategy:
     leaves = st.sampled_from([ir.ap("p"), ir.ap("q"), ir.TRUE, ir.FALSE, ir.FTP,
                               ir.cmp(">", ir.var("x"), ir.num("2")),
                               ir.cmp("<=", ir.arith("+", ir.var("x"), ir.num("1.5")),
-                                     ir.num("3"))])
+                                     ir.num("3")),
+                              ir.cmp("<", ir.arith("+", ir.var("k"), ir.num("1")), ir.var("x")),
+                              ir.cmp(">=", ir.arith("/", ir.var("k"), ir.num("2")), ir.num("1")),
+                              ir.cmp("=", ir.arith("mod", ir.var("k"), ir.num("2")), ir.num("0"))
+                              ])
     window = st.tuples(st.integers(0, 4), st.integers(0, 4)).map(sorted)
 
     def grow(sub):
@@ -52,18 +56,20 @@ def _formulas() -> st.SearchStrategy:
 
 
 def _trace(rng: random.Random, n: int) -> list[dict]:
-    return [{"p": rng.random() < 0.5, "q": rng.random() < 0.5, "x": rng.choice([0, 1, 2, 3])}
+    return [{"p": rng.random() < 0.5, "q": rng.random() < 0.5,
+             "x": rng.choice([0.0, 1.0, 2.5, 3.0]), "k": rng.choice([0, 1, 2, 3, 4])}
             for _ in range(n)]
 
 
 def _contract_text(formula: ir.Node) -> str:
     used: set[str] = set()
-    expr = lustre(formula, {"p": "p", "q": "q", "x": "x"}, {"x": "real"}, used)
-    return (library_text(used) + "\ncontract C(p, q: bool; x: real) returns ();\n"
+    expr = lustre(formula, {"p": "p", "q": "q", "x": "x", "k": "k"}, {"x": "real", "k": "int"},
+                  used)
+    return (library_text(used) + "\ncontract C(p, q: bool; x: real; k: int) returns ();\n"
             f"let\n  guarantee \"g\" {expr};\ntel\n")
 
 
-@settings(max_examples=150, deadline=None, derandomize=True)
+@settings(max_examples=300, deadline=None, derandomize=True)
 @given(_formulas(), st.integers(0, 2 ** 32 - 1))
 def test_the_lustre_nodes_compute_the_pt_formula_at_every_tick(formula, seed):
     """Differential: the emitted Lustre (fretc's operator nodes included) interpreted tick by
@@ -167,12 +173,35 @@ def test_what_lustre_cannot_say_is_left_out_with_the_reason(tmp_path):
     assert program["cSpec"].returns == [("b", "bool"), ("n", "real")]
 
 
-def test_numbers_print_in_their_context_type_and_mixing_is_refused(tmp_path):
+def test_numbers_print_in_their_context_type_and_integers_convert(tmp_path):
+    """Kind 2 converts nothing itself: literals take their comparison's type, an integer term
+    beside a real one is converted with ``real``, FRET's ``/`` is the reals'."""
     src = tmp_path / "r.fret"
     src.write_text("R1: the c shall always satisfy x > 3 & y <= 1e2\n")
     files, skipped = emit_cocospec(_compiled([src]))
     assert skipped == []
     assert "(x > 3.0)" in files["cSpec"] and "(y <= 100.0)" in files["cSpec"]
+    export = tmp_path / "p.json"
+    export.write_text(json.dumps({
+        "requirements": [{"reqid": "M1", "fulltext": "the c shall always satisfy "
+                          "n + 1 > x & n mod 2 = 0 & n / 2 < 3 & absInt(n) >= 1"},
+                         {"reqid": "M2", "fulltext": "the c shall always satisfy absInt(x) > 1"}],
+        "variables": [{"variable_name": "n", "component_name": "c", "idType": "Input",
+                       "dataType": "integer"},
+                      {"variable_name": "x", "component_name": "c", "idType": "Input",
+                       "dataType": "double"}]}))
+    compiled = _compiled([export])
+    files, skipped = emit_cocospec(compiled)
+    text = files["cSpec"]
+    assert "((real (n + 1)) > x)" in text and "((n mod 2) = 0)" in text
+    assert "(((real n) / 2.0) < 3.0)" in text and "(absInt(n) >= 1)" in text
+    assert skipped == [("cSpec", "M2", "a real term (x) where Lustre needs an integer")]
+    program = _check_structure(text)
+    rng = random.Random(5)
+    for _ in range(30):
+        trace = [{"n": rng.randint(-3, 6), "x": rng.choice([0.5, 2.0, 7.5])} for _ in range(5)]
+        got = lus.run_contract(program, "cSpec", trace)['"M1"']
+        assert got == [bool(v) for v in series(compiled[0].formalization.pt, trace)]
 
 
 def test_the_cli_writes_one_file_per_component_and_refuses_outputs_over_inputs(tmp_path):
@@ -301,3 +330,19 @@ def test_a_free_form_requirement_is_in_no_contract(tmp_path):
                                                      "no component")]
     r = CliRunner().invoke(main, [str(src), "--emit", "cocospec"])
     assert "skipped F1: free-form" in r.output and 'guarantee "R1" H(b);' in r.output
+
+
+def test_a_component_with_nothing_to_write_has_no_empty_contract(tmp_path):
+    """Kind 2's grammar wants at least one item in a contract: a component none of whose
+    requirements can be written gets a file of comments saying so."""
+    src = tmp_path / "r.fret"
+    src.write_text("A2: the c shall always satisfy n ^ 2 > 3\n")
+    files, skipped = emit_cocospec(_compiled([src]))
+    assert lus.read(files["cSpec"]) == {}  # comments only
+    assert "-- no contract: none of c's requirements could be written" in files["cSpec"]
+    try:
+        lus.read("contract E(a: bool) returns ();\nlet\ntel\n")
+    except SyntaxError:
+        pass
+    else:
+        raise AssertionError("the reader takes an empty contract")
