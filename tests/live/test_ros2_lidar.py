@@ -18,7 +18,7 @@ throughout; an independent rclpy checker writes what it receives on ``/scan``,
   while the scans stay blind. The docs' node requests no stop for it (no requirement of its
   two files asks for one while scans keep coming: R6 is for a silent LiDAR); the node of the
   guide's "Sensor faults" command (requirements/shield/sensor_faults.fret added, with
-  ``scan_invalid`` and ``scan_frozen`` as inputs) requests it (``/gwendolen_control`` true)
+  ``scan_invalid``, ``scan_frozen`` and ``scan_stamp_stuck`` as inputs) requests it (``/gwendolen_control`` true)
   within the same second too (R12), and had not before the LiDAR went blind;
 
 and in every case no non-zero command while the last stop request received is true (R3).
@@ -71,7 +71,7 @@ COMMANDS = {
              "too_close,scan_stale,clearance,obstacle_ahead,obstacle_behind"),
     "faults": (["safe_ros.fret", "shield/release.fret", "shield/sensor_faults.fret"],
                "too_close,scan_stale,clearance,obstacle_ahead,obstacle_behind,scan_invalid,"
-               "scan_frozen"),
+               "scan_frozen,scan_stamp_stuck"),
 }
 
 

@@ -2,7 +2,8 @@
 sensor that fails"): every beam NaN makes ``min(/scan.ranges) < 0.9`` unknown (it was +inf,
 false: the audit said satisfied over a blind run), ``invalid()`` counts REP 117's invalid
 measurements on a LiDAR of any beam count, ``unchanged()`` sees a frozen frame with fresh
-stamps; the shipped Safety System's requirements (R12, R13) stop the robot on each."""
+stamps, and a stamp that repeats the scan before's a stuck clock; the shipped Safety System's
+requirements (R12, R13, R14) stop the robot on each."""
 
 from __future__ import annotations
 
@@ -95,12 +96,12 @@ def test_the_invalid_share_means_the_same_on_any_beam_count(n, share):
     assert b.variables["bad"].evaluate(s) is want
 
 
-@pytest.mark.parametrize("fault", ["blind", "frozen", "sector"])
+@pytest.mark.parametrize("fault", ["blind", "frozen", "sector", "stale_stamp"])
 def test_the_shipped_safety_system_requests_a_stop_on_each_fault(fault):
     """The shipped bindings and requirements (safe_ros.fret, release.fret, sensor_faults.fret)
-    as a shield over messages: a scan that goes blind, freezes or loses a sector while the
-    controller drives on at 0.3 m/s gets a stop request and a zero command at once (R7 for
-    the unknown too_close, R12, R13 with R3)."""
+    as a shield over messages: a scan that goes blind, freezes, loses a sector or keeps its
+    clock's last stamp while the controller drives on at 0.3 m/s gets a stop request and a
+    zero command at once (R7 for the unknown too_close, R12, R13, R14 with R3)."""
     from rosbags.typesys import Stores, get_typestore
 
     from fretc.compiler.build import compile_entries
@@ -117,7 +118,7 @@ def test_the_shipped_safety_system_requests_a_stop_on_each_fault(fault):
     b = load_bindings(REPO / "requirements" / "shield" / "safe_ros_shield.bindings.toml")
     shield = build_shield(compile_entries(load_requirements(reqs)),
                           ["too_close", "scan_stale", "clearance", "scan_invalid",
-                           "scan_frozen"],
+                           "scan_frozen", "scan_stamp_stuck"],
                           ["stopped", "stop_requested", "forwarded_zero", "linear_speed",
                            "angular_speed"], bindings=b, fork=False, name="safe_ros")
     store = get_typestore(Stores.ROS2_JAZZY)
@@ -133,6 +134,8 @@ def test_the_shipped_safety_system_requests_a_stop_on_each_fault(fault):
         t = (k + 1) * PERIOD
         m = default_message(store, types["/scan"])
         m.range_min, m.range_max = 0.1, 10.0
+        stamp = t if k < 6 or fault != "stale_stamp" else 6 * PERIOD
+        m.header.stamp.sec, m.header.stamp.nanosec = divmod(stamp, 10**9)
         ranges = (3.0 + rng.normal(0, 0.01, 720)).astype("float32")
         if k >= 6:
             if fault == "blind":
@@ -159,5 +162,5 @@ def test_the_shipped_safety_system_requests_a_stop_on_each_fault(fault):
             assert stop and moving == 0.0 and "scan_frozen" in d.fault, d
         elif k < 6:
             assert not stop and moving == pytest.approx(0.3), (k, d)
-        elif k >= 7 or fault != "frozen":  # (frozen: seen from the second copy)
+        elif k >= 7 or fault not in ("frozen", "stale_stamp"):  # (seen from the 2nd copy)
             assert stop and moving == 0.0, (fault, k, d)
