@@ -61,12 +61,15 @@ class CocospecUnsupported(ValueError):
     """A pt formula Lustre (or Kind 2's typing) cannot say; the message names what."""
 
 
-#: Lustre's and Kind 2's keywords, which no variable may be named (renamed ``NAME_v``)
+#: Kind 2's keywords (its Lustre lexer's), which no variable may be named (renamed ``NAME_v``)
 LUSTRE_KEYWORDS = frozenset("""
-    and assert assume bool const contract div else ensure enum false fby guarantee if import
-    imported include int let merge mod mode node not of or pre real require returns struct
-    tel then true type var when with xor function activate restart every condact current
-    check sofar const
+    type datatype int uint sint real bool subrange of subtype struct enum history map set
+    const param transparent opaque imported rec lemma node function returns var let tel con
+    noc assert check reachable invariant provided from at within contract import true false
+    not and xor forall exists or in if then else elsif fi when cond otherwise auto end frame
+    div mod any choose current condact activate initial default every restart merge pre fby
+    last mode assume guarantee require ensure weakly assumption_vars decreases with match
+    int8 int16 int32 int64 uint8 uint16 uint32 uint64
 """.split())
 
 #: FRET's operator nodes as fretc writes them: name -> (the nodes it calls, its Lustre text).

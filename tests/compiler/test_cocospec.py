@@ -346,3 +346,12 @@ def test_a_component_with_nothing_to_write_has_no_empty_contract(tmp_path):
         pass
     else:
         raise AssertionError("the reader takes an empty contract")
+
+
+def test_a_variable_named_as_a_kind2_keyword_or_operator_node_is_renamed(tmp_path):
+    src = tmp_path / "r.fret"
+    src.write_text('@inputs merge, H1\nR1: the c shall always satisfy merge & H1 & frame\n')
+    files, _skipped = emit_cocospec(_compiled([src]))
+    program = _check_structure(files["cSpec"])
+    assert [v for v, _t in program["cSpec"].params] == ["merge_v", "H1", "frame_v"]
+    assert 'guarantee "R1" H(((merge_v and H1) and frame_v));' in files["cSpec"]
