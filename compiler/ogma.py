@@ -23,12 +23,14 @@ glossary, else from their use): fretc has no Copilot definition of an Internal v
 none is written as one, and the monitor reads it as an input (said on stderr). Left out,
 with the reason: a requirement that did not formalize, a pt formula that needs the future,
 and one using what Ogma's SMV grammar has no form for (functions, ``mod``, ``^``, unary
-minus, an if-then-else of numbers).
+minus, an if-then-else of numbers, a number in exponent notation, a name that does not
+start with a letter: a quoted FRETish name).
 """
 
 from __future__ import annotations
 
 import json
+import re
 from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
@@ -42,6 +44,9 @@ if TYPE_CHECKING:
 
 __all__ = ["emit_ogma", "ogma_refusal"]
 
+#: BNFC's Integer and Double tokens, and its Ident (Ogma's SMV grammar, SMV.cf)
+_NUMBER = re.compile(r"[0-9]+|[0-9]+\.[0-9]+(?:e-?[0-9]+)?")
+_IDENT = re.compile(r"[A-Za-z][A-Za-z0-9_']*")
 _NOT_IN_SMV = {"fn": "function ({})", "call": "function ({})", "pre": "function ({})",
                "neg": "unary minus", "ite": "an if-then-else of numbers",
                "future": "future-time function ({}): the pt formula needs the future"}
@@ -55,6 +60,11 @@ def ogma_refusal(pt: ir.Node) -> str | None:
             return "Ogma's SMV grammar has no " + _NOT_IN_SMV[x.op].format(x.name)
         if x.op == "arith" and x.name in ("mod", "^"):
             return f"Ogma's SMV grammar has no {x.name} operator"
+        if x.op == "num" and not _NUMBER.fullmatch(name_of(x)):
+            return f"Ogma's SMV grammar has no literal {name_of(x)} (its Integer or Double)"
+        if x.op in ("ap", "var") and not _IDENT.fullmatch(mangle(name_of(x))):
+            return (f"the name {mangle(name_of(x))} is no identifier of Ogma's SMV grammar "
+                    "(a letter first)")
     return None
 
 

@@ -163,3 +163,16 @@ def test_fret_case_studies_as_ogma_reads_them(shared):
                 assert pt == pts[name] and _smv_tokens_ok(pt), (path.name, name)
                 checked += 1
     assert checked >= 150, checked
+
+
+def test_numbers_and_names_outside_ogmas_tokens_are_left_out(tmp_path):
+    src = tmp_path / "r.fret"
+    src.write_text('R1: the c shall always satisfy x > 1e3\n'
+                   'R2: the c shall always satisfy "last" & b\n'
+                   'R3: the c shall always satisfy x > 2.5\n')
+    files, skipped, _notes = emit_ogma(_compiled([src]))
+    assert [(rid, why.split(" (")[0]) for _s, rid, why in skipped] == [
+        ("R1", "Ogma's SMV grammar has no literal 1e3"),
+        ("R2", "the name _DQT_last_DQT_ is no identifier of Ogma's SMV grammar")]
+    got = _ogma_reads(files["cSpec"])
+    assert [r[0] for r in got["requirements"]] == ["R3"]
