@@ -355,3 +355,13 @@ def test_a_variable_named_as_a_kind2_keyword_or_operator_node_is_renamed(tmp_pat
     program = _check_structure(files["cSpec"])
     assert [v for v, _t in program["cSpec"].params] == ["merge_v", "H1", "frame_v"]
     assert 'guarantee "R1" H(((merge_v and H1) and frame_v));' in files["cSpec"]
+
+
+def test_one_component_goes_to_the_file_o_names(tmp_path):
+    out = tmp_path / "mine.lus"
+    r = CliRunner().invoke(main, ["requirements/r1.fret", "--emit", "cocospec", "-o", str(out)])
+    assert r.exit_code == 0, r.output
+    assert "contract agilex_agentSpec(" in out.read_text()
+    r = CliRunner().invoke(main, ["requirements/safe_ros.fret", "--emit", "cocospec", "-o",
+                                  str(out)])
+    assert r.exit_code == 2 and "one per component" in r.output

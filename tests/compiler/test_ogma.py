@@ -134,6 +134,7 @@ def test_the_cli_writes_json_files_and_refuses_an_output_over_an_input(tmp_path)
     r = runner.invoke(main, ["requirements/safe_ros.fret", "--emit", "ogma", "-o",
                              str(tmp_path / "x.json")])
     assert r.exit_code == 2  # several components: -o FILE.json is refused
+    assert "4 files are written (one per component: agilex_agentSpec, " in r.output
     src = tmp_path / "cSpec.json"
     src.write_text(json.dumps([{"reqid": "A", "fulltext": "the c shall always satisfy b"}]))
     r = runner.invoke(main, [str(src), "--emit", "ogma", "-o", str(tmp_path)])

@@ -89,6 +89,11 @@ def write_exports(emit: str, compiled: Sequence[Compiled], output: str | None,
 
         outputs, skipped, notes = emit_ogma(compiled)
         suffix = ".json"
+    if output is not None and len(outputs) > 1 and Path(output).suffix == suffix:
+        click.echo(shown(f"error: -o {output}: {len(outputs)} files are written (one per "
+                         f"component: {', '.join(outputs)}); give a directory (no {suffix} "
+                         "suffix) or the requirements of one component"), err=True)
+        sys.exit(2)
     check_output(outputs, output, suffix)
     write_outputs(outputs, output, suffix)
     reported = {c.id for c in compiled if c.error is not None}
