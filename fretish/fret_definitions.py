@@ -1,4 +1,5 @@
-"""The definitions of a FRET glossary's Internal variables, expanded for the analyses.
+"""The definitions of a FRET glossary's Internal variables and modes, expanded for the
+analyses.
 
 FRET reads an Internal variable as its definition (its ``assignment``, in FRET's Lustre
 subset: :mod:`fretc.fretish.lustre`) when it checks realizability, so a requirement reading
@@ -8,7 +9,9 @@ it reads replaced by theirs (a literal is that constant), and, for each one fret
 free variable, why: a definition outside the subset, or one that reads itself (through
 ``pre``: ``psiAtZero`` is ``Psi -> if ... then Psi else pre psiAtZero``, a stream with state
 that no expression of the variables' present and past values without it writes), or that
-reads such a variable. The expansions are what ``fretc check``, ``fretc shield`` and ``fretc
+reads such a variable. A Mode with a mode requirement (FRET's glossary: the condition under
+which the component is in that mode, a FRETish condition) is that condition, so ``in M mode``
+is the intervals where it holds. The expansions are what ``fretc check``, ``fretc shield`` and ``fretc
 testgen`` analyse (:func:`fretc.fretish.fret_variables.with_fret_constants`); the formulas
 fretc prints keep the variable's name, as FRET's ft and pt do.
 """
@@ -59,6 +62,13 @@ def definitions(variables: tuple[Any, ...]) -> Definitions:
     texts = {v.name: v.assignment.strip() for v in variables
              if v.kind == "Internal" and v.assignment.strip()}
     for v in variables:
+        if v.kind == "Mode" and v.mode_requirement.strip():
+            texts[v.name] = v.mode_requirement.strip()
+            try:
+                raw[v.name] = _mode(texts[v.name], is_boolean)
+            except LustreError as exc:
+                free[v.name] = f"its mode requirement is not a FRETish condition ({exc})"
+            continue
         if v.name not in texts:
             continue
         literal = constant_of(v)
@@ -73,6 +83,39 @@ def definitions(variables: tuple[Any, ...]) -> Definitions:
     for name in sorted(raw):
         _expand(name, raw, values, free, ())
     return Definitions(values, free, texts)
+
+
+def _mode(text: str, is_boolean: Any) -> A.Expr:
+    """A Mode's requirement (FRET's glossary: a condition on the component's variables, in
+    FRETish's expression syntax, ``altitude > 1000 & engaged``; else read as Lustre, the
+    syntax of FRET's Internal assignments). Raises :class:`LustreError` when it is neither."""
+    from fretc.common.errors import FretishError
+    from fretc.fretish.parser import parse_expression
+
+    try:
+        return _plain(parse_expression(text))
+    except FretishError as exc:
+        try:
+            return parse_definition(text, is_boolean)
+        except LustreError:
+            raise LustreError(str(exc).splitlines()[0]) from None
+
+
+def _plain(e: Any) -> Any:
+    """``e`` without its spans (so one definition substituted at many places is one value)."""
+    if isinstance(e, A.Var):
+        return A.Var(e.name)
+    if isinstance(e, A.BoolLit):
+        return A.BoolLit(e.value)
+    if isinstance(e, A.NumLit):
+        return A.NumLit(e.text)
+    if isinstance(e, A.Unary):
+        return A.Unary(e.op, _plain(e.operand))
+    if isinstance(e, A.Binary):
+        return A.Binary(e.op, _plain(e.left), _plain(e.right))
+    if isinstance(e, A.Call):
+        return A.Call(e.name, tuple(_plain(a) for a in e.args))
+    return e
 
 
 def _expand(name: str, raw: dict[str, A.Expr], values: dict[str, A.Expr],

@@ -56,6 +56,7 @@ class FretVariable:
     kind: str
     data_type: str = ""
     assignment: str = ""
+    mode_requirement: str = ""
 
 
 def fret_variables(data: Any, source: str) -> list[FretVariable]:
@@ -79,7 +80,8 @@ def fret_variables(data: Any, source: str) -> list[FretVariable]:
         if v.get("modeldoc") is True or "portType" in v or "variable_name" not in v:
             continue  # (a Simulink model's port, or the model's own entry)
         fields = {}
-        for key in ("variable_name", "component_name", "idType", "dataType", "assignment"):
+        for key in ("variable_name", "component_name", "idType", "dataType", "assignment",
+                    "modeRequirement"):
             x = v.get(key, "")
             if not isinstance(x, str):
                 raise FretishFileError(f"{where}: \"{key}\" is not a string but "
@@ -93,7 +95,8 @@ def fret_variables(data: Any, source: str) -> list[FretVariable]:
                                    f"of FRET's ({', '.join(k for k in _KINDS if k)})",
                                    source=source)
         out.append(FretVariable(fields["component_name"], name, fields["idType"],
-                                fields["dataType"], fields["assignment"]))
+                                fields["dataType"], fields["assignment"],
+                                fields["modeRequirement"]))
     return out
 
 
@@ -185,6 +188,12 @@ def unused(variables: list[FretVariable] | tuple[FretVariable, ...], read: set[s
                        f"that {what} in the analysis (the emitted formulas keep its name)")
         elif v.kind == "Internal" and v.assignment.strip():
             out.append(f"{v.name}: FRET defines it (Internal) as {_short(v.assignment)}; "
+                       f"fretc reads it as a free variable: {defs.free.get(v.name, '')}")
+        elif v.kind == "Mode" and v.name in defs.values:
+            out.append(f"{v.name}: FRET defines the mode as {_short(v.mode_requirement)}; "
+                       "that definition in the analysis (the emitted formulas keep its name)")
+        elif v.kind == "Mode" and v.mode_requirement.strip():
+            out.append(f"{v.name}: FRET defines the mode as {_short(v.mode_requirement)}; "
                        f"fretc reads it as a free variable: {defs.free.get(v.name, '')}")
         elif v.kind in ("Mode", "Function"):
             out.append(f"{v.name}: declared a {v.kind} in FRET; fretc reads it as a free "

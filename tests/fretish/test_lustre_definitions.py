@@ -187,3 +187,36 @@ def test_check_reads_an_internal_variable_as_its_definition(tmp_path):
     path.write_text(json.dumps(doc), encoding="utf-8")
     got = CliRunner().invoke(main, ["check", str(path), "--no-progress", "--json"])
     assert got.exit_code == 1 and "unrealizable" in got.output, got.output
+
+
+def test_a_mode_is_its_mode_requirement(tmp_path):
+    """A Mode with FRET's mode requirement (a FRETish condition) is that condition: ``in
+    cruise mode`` holds where ``speed > 10``; without a requirement it stays a free variable,
+    declared neither input nor output (exit 2)."""
+    doc = {"requirements": [
+        {"reqid": "M1", "fulltext": "in cruise mode ctrl shall always satisfy o"},
+        {"reqid": "M2", "fulltext": "whenever speed <= 10 ctrl shall immediately satisfy !o"}],
+        "variables": [
+        {"component_name": "ctrl", "variable_name": "speed", "idType": "Input",
+         "dataType": "double"},
+        {"component_name": "ctrl", "variable_name": "o", "idType": "Output",
+         "dataType": "boolean"},
+        {"component_name": "ctrl", "variable_name": "cruise", "idType": "Mode",
+         "dataType": "boolean", "modeRequirement": "speed > 10"}]}
+    path = tmp_path / "p.json"
+    path.write_text(json.dumps(doc), encoding="utf-8")
+    got = CliRunner().invoke(main, ["check", str(path), "--no-progress", "--json"])
+    assert got.exit_code == 0, got.output
+    res = json.loads(got.output)
+    assert all(g["realizable"] is True for g in res["realizability"]["groups"])
+    assert any(n.startswith("cruise: FRET defines the mode as speed > 10; that definition")
+               for n in res["notes"])
+    # the mode overlapping M2's trigger: o and !o both owed where 8 < speed <= 10
+    doc["variables"][2]["modeRequirement"] = "speed > 8"
+    path.write_text(json.dumps(doc), encoding="utf-8")
+    got = CliRunner().invoke(main, ["check", str(path), "--no-progress", "--json"])
+    assert got.exit_code == 1 and "unrealizable" in got.output, got.output
+    doc["variables"][2]["modeRequirement"] = ""
+    path.write_text(json.dumps(doc), encoding="utf-8")
+    got = CliRunner().invoke(main, ["check", str(path), "--no-progress", "--json"])
+    assert got.exit_code == 2 and "cruise a Mode of ctrl" in got.output, got.output
