@@ -25,7 +25,12 @@ some before and some during an approach) for ``--fault-duration S`` (a sector fa
 Then per fault class (``none``: the runs without a fault) and Safety System: the runs,
 missions completed, aborted and ended in contact, the least clearance, the shield's
 overridden ticks; and each run that ended in contact under a fault (scenario, seed, the
-fault's start). With faults the exit code is 1 when the shield has a contact in any run, or
+fault's start). Then the fault modes and effects as measured (the FMEA of docs/guide/shield.md,
+"Sensor faults", written by this command; ``--markdown`` prints it as that page's table): per
+fault class, the requirements whose reasons the shield gave at its first override from the
+fault's start on, the latest of those first overrides after the start over the runs (s), the
+outputs that override changed, and the runs with no override during the fault (a fault the
+shield did not answer: the robot stood still, or nothing was enforced). With faults the exit code is 1 when the shield has a contact in any run, or
 leaves uncompleted a mission the SIF completes without a fault (a fault the shield answers
 by stopping the robot may cost a mission: that is failing safe), else 0.
 """
@@ -43,17 +48,24 @@ from fretc.sim.scenarios import SCENARIOS
 from fretc.sim.space import DEFAULT_SECTOR
 
 
-def _one(args: tuple) -> tuple[str, int, str, str, float, int, int]:
-    """(scenario, seed, safety, outcome, least clearance m, overrides, shield ticks) of
-    ``(scenario, seed, shield folder or None[, fault or None])``."""
+def _one(args: tuple) -> tuple:
+    """(scenario, seed, safety, outcome, least clearance m, overrides, shield ticks, first
+    override in the fault's window or None) of ``(scenario, seed, shield folder or None[,
+    fault or None])``; the first override is ``(s after the fault's start, reasons, changed
+    outputs)``."""
     name, seed, shield = args[:3]
     fault = args[3] if len(args) > 3 else None
     sc = SCENARIOS[name] if fault is None else replace(SCENARIOS[name], faults=(fault,))
     res = record_scenario(sc, seed=seed,
                           shield=shield_of(f"shield:{shield}") if shield else None)
     outcome = "contact" if res.contact is not None else res.outcome
+    first = None
+    if fault is not None:
+        first = next(((t - fault.start, reasons, changed) for t, reasons, changed
+                      in res.overrides if fault.start <= t <= fault.start + fault.duration),
+                     None)
     return (name, seed, "shield" if shield else "sif", outcome, res.min_clearance,
-            len(res.overrides), res.shield_ticks)
+            len(res.overrides), res.shield_ticks, first)
 
 
 def main() -> int:
@@ -70,6 +82,8 @@ def main() -> int:
                     help="the fault's start times [s of sim time]")
     ap.add_argument("--fault-duration", type=float, default=None, metavar="S",
                     help="how long each fault lasts [s]")
+    ap.add_argument("--markdown", action="store_true",
+                    help="with --fault: print the FMEA as a Markdown table")
     ap.add_argument("--fault-sector", default=None, metavar="LO:HI",
                     help="the sector [degrees, REP 103] of sector_nan and near_returns "
                          "(default -45:45, the 90 degrees ahead)")
@@ -83,7 +97,7 @@ def main() -> int:
             rows = list(pool.map(_one, work, chunksize=4))
     else:
         rows = [_one(w) for w in work]
-    by = {(n, k, s): (o, c, ov, t) for n, k, s, o, c, ov, t in rows}
+    by = {(n, k, s): (o, c, ov, t) for n, k, s, o, c, ov, t, _first in rows}
     print(f"{'scenario':20s} {'safety':7s} completed aborted contact  least clearance  "
           "overridden ticks")
     for n in names:
@@ -142,7 +156,8 @@ def _faults(ap: argparse.ArgumentParser, a: argparse.Namespace, names: list[str]
             rows = list(pool.map(_one, work, chunksize=4))
     else:
         rows = [_one(w) for w in work]
-    by = {(w[0], w[1], w[2] and "shield" or "sif", w[3]): r[3:] for w, r in zip(work, rows)}
+    by = {(w[0], w[1], w[2] and "shield" or "sif", w[3]): r[3:7] for w, r in zip(work, rows)}
+    firsts = {(w[0], w[1], w[3]): r[7] for w, r in zip(work, rows) if w[2] and w[3]}
     print(f"faults of {a.fault_duration:g} s at {a.fault_at} s; scenarios: "
           f"{', '.join(names)}; seeds 1..{a.seeds}")
     print(f"{'fault':15s} {'safety':7s} {'runs':>5s} completed aborted contact  "
@@ -158,6 +173,7 @@ def _faults(ap: argparse.ArgumentParser, a: argparse.Namespace, names: list[str]
     for n, k, s, f in contacts:
         where = "no fault" if f is None else f"{f.kind} at {f.start:g} s"
         print(f"contact: {s} {n} seed {k}: {where}")
+    _fmea(a.fault, faults, firsts, a.markdown)
     shield_contacts = [c for c in contacts if c[2] == "shield"]
     lost = [(n, k) for n in names for k in seeds
             if by[(n, k, "sif", None)][0] == "completed"
@@ -167,6 +183,32 @@ def _faults(ap: argparse.ArgumentParser, a: argparse.Namespace, names: list[str]
     print(f"{len(work) // 2} runs per Safety System; shield: {len(shield_contacts)} contacts, "
           f"{len(lost)} missions the SIF completes without a fault left uncompleted")
     return 1 if shield_contacts or lost else 0
+
+
+def _fmea(kinds: list[str], faults: list[Fault], firsts: dict, markdown: bool) -> None:
+    """Print the fault modes and effects measured (module docstring): ``firsts`` maps
+    (scenario, seed, fault) to the shield's first override in the fault's window."""
+    rows = []
+    for kind in kinds:
+        got = [v for (_n, _k, f), v in firsts.items() if f.kind == kind]
+        answered = [v for v in got if v is not None]
+        reqs = sorted({r for _d, reasons, _c in answered for r in reasons},
+                      key=lambda r: (len(r), r))
+        outs = sorted({o for _d, _r, changed in answered for o in changed})
+        late = max((d for d, _r, _c in answered), default=None)
+        rows.append((kind, ", ".join(reqs) or "-", "-" if late is None else f"{late:.1f}",
+                     ", ".join(outs) or "-", f"{len(got) - len(answered)} of {len(got)}"))
+    head = ("fault class", "answered by (first override)", "latest first override (s)",
+            "outputs it changed", "runs not overridden")
+    if markdown:
+        print("| " + " | ".join(head) + " |\n|" + "---|" * len(head))
+        for r in rows:
+            print("| " + " | ".join(r) + " |")
+        return
+    print("fault modes and effects (the shield's first override in each fault's window):")
+    for r in rows:
+        print(f"  {r[0]:15s} by {r[1]}; latest {r[2]} s after the start; changed {r[3]}; "
+              f"{r[4]} runs not overridden")
 
 
 if __name__ == "__main__":
