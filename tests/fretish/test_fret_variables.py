@@ -108,7 +108,7 @@ def test_the_shield_takes_the_outputs_and_their_whole_numbers(tmp_path):
     assert got.exit_code == 2 and "gear is an Internal variable in FRET's export" in got.output
 
 
-def test_a_literal_internal_assignment_is_that_constant_elsewhere_a_free_variable(tmp_path):
+def test_a_literal_internal_assignment_is_that_constant_and_a_mode_its_requirement(tmp_path):
     from fretc.fretish.fret_variables import FretVariable, constant_of, with_fret_constants
 
     def internal(a: str) -> FretVariable:
@@ -131,5 +131,6 @@ def test_a_literal_internal_assignment_is_that_constant_elsewhere_a_free_variabl
     (before,) = compile_entries([entry])
     (after,) = compile_entries([with_fret_constants(entry)])
     assert set(before.formalization.variables) == {"m", "k", "x", "flag", "on"}
-    assert set(after.formalization.variables) == {"m", "x", "on"}  # (a mode is no constant)
+    # the mode is its mode requirement (on): in m mode is where on holds
+    assert set(after.formalization.variables) == {"x", "on"}
     assert with_fret_constants(entry).text == entry.text
