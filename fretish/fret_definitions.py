@@ -20,17 +20,34 @@ from __future__ import annotations
 
 import dataclasses
 import functools
+import re
 from dataclasses import dataclass
 from typing import Any
 
 from fretc.fretish import ast as A
 from fretc.fretish.lustre import LustreError, parse_definition
 
-__all__ = ["Definitions", "definitions", "substitute", "MAX_EXPANSION_NODES"]
+__all__ = ["Definitions", "definitions", "substitute", "constant_of", "MAX_EXPANSION_NODES"]
+
+#: A Lustre literal (Lustre's ``INT``/``REAL`` constants, ``true``/``false``)
+_LITERAL = re.compile(r"[-+]?([0-9]+(\.[0-9]*)?|\.[0-9]+)([eE][-+]?[0-9]+)?\Z")
 
 #: An expansion past this many expression nodes is not made (the variable stays free, the
 #: notes say so): a definition that reads a definition that reads ... can grow each time.
 MAX_EXPANSION_NODES = 2000
+
+
+def constant_of(v: Any) -> A.Expr | None:
+    """The literal an Internal variable's assignment is (a number or ``true``/``false`` as
+    Lustre writes them), else None; ``v`` a :class:`fretc.fretish.fret_variables.FretVariable`."""
+    text = v.assignment.strip()
+    if v.kind != "Internal" or not text:
+        return None
+    if text in ("true", "false"):
+        return A.BoolLit(text == "true")
+    if _LITERAL.match(text):
+        return A.NumLit(text.lstrip("+"))
+    return None
 
 
 @dataclass(frozen=True)
@@ -49,8 +66,6 @@ def definitions(variables: tuple[Any, ...]) -> Definitions:
     """The :class:`Definitions` of one component's FRET variables (a tuple of
     :class:`fretc.fretish.fret_variables.FretVariable`; those that are not Internal or have
     no assignment are not definitions). Deterministic; memoized by the tuple."""
-    from fretc.fretish.fret_variables import constant_of
-
     kinds = {v.name: v for v in variables}
 
     def is_boolean(name: str) -> bool:

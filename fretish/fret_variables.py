@@ -26,19 +26,17 @@ the numbers being reals) is named by :func:`unused`, never silently dropped.
 from __future__ import annotations
 
 import dataclasses
-import re
 from dataclasses import dataclass
 from collections.abc import Collection
 from typing import Any
 
 from fretc.common.errors import FretishFileError
 from fretc.fretish import ast as A
+from fretc.fretish.fret_definitions import constant_of, definitions, substitute
 
 __all__ = ["FretVariable", "fret_variables", "declare", "unused", "INTEGER_TYPES",
            "with_fret_constants", "constant_of", "names_read", "fret_declarations"]
 
-#: A Lustre literal (Lustre's ``INT``/``REAL`` constants, ``true``/``false``)
-_LITERAL = re.compile(r"[-+]?([0-9]+(\.[0-9]*)?|\.[0-9]+)([eE][-+]?[0-9]+)?\Z")
 
 #: FRET's ``dataType`` values of whole numbers
 INTEGER_TYPES = frozenset({"integer", "unsigned integer"})
@@ -111,19 +109,6 @@ def declare(entry: Any, declared: list[FretVariable]) -> None:
     entry.outputs = tuple(dict.fromkeys(v.name for v in own if v.kind == "Output"))
 
 
-def constant_of(v: FretVariable) -> A.Expr | None:
-    """The literal an Internal variable's assignment is (a number or ``true``/``false`` as
-    Lustre writes them), else None."""
-    text = v.assignment.strip()
-    if v.kind != "Internal" or not text:
-        return None
-    if text in ("true", "false"):
-        return A.BoolLit(text == "true")
-    if _LITERAL.match(text):
-        return A.NumLit(text.lstrip("+"))
-    return None
-
-
 def with_fret_constants(entry: Any, keep: Collection[str] = ()) -> Any:
     """``entry`` (:class:`fretc.fretish.entry.RequirementEntry`) with each Internal variable
     of its FRET export that FRET defines replaced by its definition in its requirement's
@@ -132,8 +117,6 @@ def with_fret_constants(entry: Any, keep: Collection[str] = ()) -> Any:
     variables it reads expanded (:mod:`fretc.fretish.fret_definitions`); those fretc keeps
     free stay variables, and so do those in ``keep`` (``fretc audit``: the variables the
     bindings bind, read from the log). The entry itself when there is none."""
-    from fretc.fretish.fret_definitions import definitions, substitute
-
     values = {k: v for k, v in definitions(tuple(entry.variables)).values.items()
               if k not in keep}
     req = entry.requirement
@@ -176,8 +159,6 @@ def unused(variables: list[FretVariable] | tuple[FretVariable, ...], read: set[s
     read as a free variable, an integer type; ``whole``: the variables the shield gives
     whole numbers (its outputs declared ``integer``), whose type is used. ``read`` is
     closed over the definitions: a variable an expanded definition reads is read."""
-    from fretc.fretish.fret_definitions import definitions
-
     defs = definitions(tuple(variables))
     read = _through_definitions(read, defs.values)
     out = []
