@@ -109,10 +109,10 @@ def _with_constants(entries: list, files: list[tuple[Path, Bindings]]) -> list:
 def _with_definitions(entries: list, bindings: Bindings | None, notes: list[str]) -> list:
     """``entries`` with the Internal variables their FRET export defines, and the bindings
     do not bind, read as their definitions (FRET's glossary:
-    :func:`fretc.fretish.fret_variables.with_fret_constants`), each such variable named
+    :func:`fretc.fretish.fret_variables.with_fret_definitions`), each such variable named
     once in ``notes``; a bound one is read from the log, as every bound variable is."""
     from fretc.fretish.fret_definitions import definitions
-    from fretc.fretish.fret_variables import names_read, with_fret_constants
+    from fretc.fretish.fret_variables import names_read, with_fret_definitions
 
     bound = set(bindings.variables) | set(bindings.per_entity) if bindings is not None \
         else set()
@@ -128,7 +128,7 @@ def _with_definitions(entries: list, bindings: Bindings | None, notes: list[str]
                 said.add(n)
                 notes.append(f"{n}: FRET's definition of this Internal variable computed "
                               "from the variables it reads (no binding of its own)")
-        out.append(with_fret_constants(e, keep=bound) if used else e)
+        out.append(with_fret_definitions(e, keep=bound) if used else e)
     return out
 
 

@@ -12,7 +12,7 @@ that no expression of the variables' present and past values without it writes),
 reads such a variable. A Mode with a mode requirement (FRET's glossary: the condition under
 which the component is in that mode, a FRETish condition) is that condition, so ``in M mode``
 is the intervals where it holds. The expansions are what ``fretc check``, ``fretc shield`` and ``fretc
-testgen`` analyse (:func:`fretc.fretish.fret_variables.with_fret_constants`); the formulas
+testgen`` analyse (:func:`fretc.fretish.fret_variables.with_fret_definitions`); the formulas
 fretc prints keep the variable's name, as FRET's ft and pt do.
 """
 

@@ -13,7 +13,7 @@ variable's ``assignment`` (a Lustre expression defining it) and a Mode's
 fretc takes a component's Input and Output variables as the ``@inputs``/``@outputs`` of its
 requirements (``fretc check``'s realizability, ``fretc shield``). An Internal variable is its
 definition, as FRET's realizability reads it, for the analyses (``fretc check``, ``fretc
-shield``, ``fretc testgen``; :func:`with_fret_constants`): a literal (FRET's case studies:
+shield``, ``fretc testgen``; :func:`with_fret_definitions`): a literal (FRET's case studies:
 ``ap_standby_state`` is ``3.0``) is that constant, a Lustre expression
 (``roll_hold`` is ``autopilot_engaged and not hdg_hold``, ``0.0 -> pre xin``) its FRETish
 reading with the Internal variables it reads expanded (:mod:`fretc.fretish.lustre`,
@@ -35,7 +35,7 @@ from fretc.fretish import ast as A
 from fretc.fretish.fret_definitions import constant_of, definitions, substitute
 
 __all__ = ["FretVariable", "fret_variables", "declare", "unused", "INTEGER_TYPES",
-           "with_fret_constants", "constant_of", "names_read", "fret_declarations"]
+           "with_fret_definitions", "constant_of", "names_read", "fret_declarations"]
 
 
 #: FRET's ``dataType`` values of whole numbers
@@ -109,7 +109,7 @@ def declare(entry: Any, declared: list[FretVariable]) -> None:
     entry.outputs = tuple(dict.fromkeys(v.name for v in own if v.kind == "Output"))
 
 
-def with_fret_constants(entry: Any, keep: Collection[str] = ()) -> Any:
+def with_fret_definitions(entry: Any, keep: Collection[str] = ()) -> Any:
     """``entry`` (:class:`fretc.fretish.entry.RequirementEntry`) with each Internal variable
     of its FRET export that FRET defines replaced by its definition in its requirement's
     expressions (conditions, response, stop condition, a scope's condition or mode): a
@@ -139,7 +139,7 @@ def with_fret_constants(entry: Any, keep: Collection[str] = ()) -> Any:
 
 def names_read(entries: Any) -> set[str]:
     """The FRET variables the requirements of ``entries`` read as written (before
-    :func:`with_fret_constants`)."""
+    :func:`with_fret_definitions`)."""
     out: set[str] = set()
     for e in entries:
         req = e.requirement
@@ -155,7 +155,7 @@ def unused(variables: list[FretVariable] | tuple[FretVariable, ...], read: set[s
            whole: Collection[str] = ()) -> list[str]:
     """What the FRET declarations of the variables in ``read`` say, and how fretc reads
     it, one sentence per variable (sorted by name): an Internal variable's definition used
-    (:func:`with_fret_constants`) or why it is not (then a free variable), a Mode or Function
+    (:func:`with_fret_definitions`) or why it is not (then a free variable), a Mode or Function
     read as a free variable, an integer type; ``whole``: the variables the shield gives
     whole numbers (its outputs declared ``integer``), whose type is used. ``read`` is
     closed over the definitions: a variable an expanded definition reads is read."""
@@ -209,11 +209,11 @@ def _short(text: str, limit: int = 160) -> str:
 def fret_declarations(entries: list, whole: Collection[str] = ()
                       ) -> tuple[list, list[str]]:
     """``entries`` with their FRET export's literal Internal assignments as constants
-    (:func:`with_fret_constants`), and the notes of :func:`unused` (``whole`` as there) over
+    (:func:`with_fret_definitions`), and the notes of :func:`unused` (``whole`` as there) over
     the variables they read as written (``fretc check``'s and ``fretc shield``'s);
     ``entries`` and no note when none comes from an export that declares variables."""
     declared = list({(v.component, v.name): v for e in entries for v in e.variables}.values())
     if not declared:
         return entries, []
     notes = unused(declared, names_read(entries), whole)
-    return [with_fret_constants(e) for e in entries], notes
+    return [with_fret_definitions(e) for e in entries], notes

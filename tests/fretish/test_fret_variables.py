@@ -109,7 +109,7 @@ def test_the_shield_takes_the_outputs_and_their_whole_numbers(tmp_path):
 
 
 def test_a_literal_internal_assignment_is_that_constant_and_a_mode_its_requirement(tmp_path):
-    from fretc.fretish.fret_variables import FretVariable, constant_of, with_fret_constants
+    from fretc.fretish.fret_variables import FretVariable, constant_of, with_fret_definitions
 
     def internal(a: str) -> FretVariable:
         return FretVariable("c", "k", "Internal", "double", a)
@@ -129,8 +129,8 @@ def test_a_literal_internal_assignment_is_that_constant_and_a_mode_its_requireme
     from fretc.compiler.build import compile_entries
 
     (before,) = compile_entries([entry])
-    (after,) = compile_entries([with_fret_constants(entry)])
+    (after,) = compile_entries([with_fret_definitions(entry)])
     assert set(before.formalization.variables) == {"m", "k", "x", "flag", "on"}
     # the mode is its mode requirement (on): in m mode is where on holds
     assert set(after.formalization.variables) == {"x", "on"}
-    assert with_fret_constants(entry).text == entry.text
+    assert with_fret_definitions(entry).text == entry.text
