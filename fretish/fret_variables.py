@@ -151,14 +151,19 @@ def names_read(entries: Any) -> set[str]:
     return out
 
 
+#: how the analyses use a FRET definition (:func:`unused`'s sentence)
+ANALYSIS_USE = "in the analysis (the emitted formulas keep its name)"
+
+
 def unused(variables: list[FretVariable] | tuple[FretVariable, ...], read: set[str],
-           whole: Collection[str] = ()) -> list[str]:
+           whole: Collection[str] = (), use: str = ANALYSIS_USE) -> list[str]:
     """What the FRET declarations of the variables in ``read`` say, and how fretc reads
     it, one sentence per variable (sorted by name): an Internal variable's definition used
     (:func:`with_fret_definitions`) or why it is not (then a free variable), a Mode or Function
     read as a free variable, an integer type; ``whole``: the variables the shield gives
-    whole numbers (its outputs declared ``integer``), whose type is used. ``read`` is
-    closed over the definitions: a variable an expanded definition reads is read."""
+    whole numbers (its outputs declared ``integer``), whose type is used; ``use`` how a
+    definition used is used (after "that definition"). ``read`` is closed over the
+    definitions: a variable an expanded definition reads is read."""
     defs = definitions(tuple(variables))
     read = _through_definitions(read, defs.values)
     out = []
@@ -166,13 +171,13 @@ def unused(variables: list[FretVariable] | tuple[FretVariable, ...], read: set[s
         if v.kind == "Internal" and v.name in defs.values:
             what = "constant" if constant_of(v) is not None else "definition"
             out.append(f"{v.name}: FRET defines it (Internal) as {_short(v.assignment)}; "
-                       f"that {what} in the analysis (the emitted formulas keep its name)")
+                       f"that {what} {use}")
         elif v.kind == "Internal" and v.assignment.strip():
             out.append(f"{v.name}: FRET defines it (Internal) as {_short(v.assignment)}; "
                        f"fretc reads it as a free variable: {defs.free.get(v.name, '')}")
         elif v.kind == "Mode" and v.name in defs.values:
             out.append(f"{v.name}: FRET defines the mode as {_short(v.mode_requirement)}; "
-                       "that definition in the analysis (the emitted formulas keep its name)")
+                       f"that definition {use}")
         elif v.kind == "Mode" and v.mode_requirement.strip():
             out.append(f"{v.name}: FRET defines the mode as {_short(v.mode_requirement)}; "
                        f"fretc reads it as a free variable: {defs.free.get(v.name, '')}")
@@ -206,14 +211,15 @@ def _short(text: str, limit: int = 160) -> str:
     return one if len(one) <= limit else one[:limit - 3] + "..."
 
 
-def fret_declarations(entries: list, whole: Collection[str] = ()
+def fret_declarations(entries: list, whole: Collection[str] = (), use: str = ANALYSIS_USE
                       ) -> tuple[list, list[str]]:
-    """``entries`` with their FRET export's literal Internal assignments as constants
-    (:func:`with_fret_definitions`), and the notes of :func:`unused` (``whole`` as there) over
+    """``entries`` with their FRET export's definitions applied
+    (:func:`with_fret_definitions`), and the notes of :func:`unused` (``whole`` and ``use``
+    as there) over
     the variables they read as written (``fretc check``'s and ``fretc shield``'s);
     ``entries`` and no note when none comes from an export that declares variables."""
     declared = list({(v.component, v.name): v for e in entries for v in e.variables}.values())
     if not declared:
         return entries, []
-    notes = unused(declared, names_read(entries), whole)
+    notes = unused(declared, names_read(entries), whole, use)
     return [with_fret_definitions(e) for e in entries], notes

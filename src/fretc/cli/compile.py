@@ -47,12 +47,28 @@ def _entries(paths, tick_period: str | None = None) -> list:
     return entries_with_period(entries, tick_period)
 
 
-def _load(paths, tick_period: str | None = None) -> list:
-    """The compiled requirements of ``paths`` (:func:`_entries`, then the compiler)."""
+def _load(paths, tick_period: str | None = None, definitions: bool = False) -> list:
+    """The compiled requirements of ``paths`` (:func:`_entries`, then the compiler). With
+    ``definitions`` (the runtime monitors: ``--emit monitor``, ``c``, ``c2po``), the
+    Internal variables and modes a FRET export defines are their definitions, as FRET's
+    own monitors (Ogma's Copilot streams) compute them from the variables they read: each
+    said once on stderr, with those kept as inputs and why
+    (:func:`fretc.fretish.fret_variables.fret_declarations`)."""
     # lazy: the compiler (Lark tables, Spot) only when a command compiles
     from fretc.compiler.build import compile_entries
 
-    return compile_entries(_entries(paths, tick_period))
+    entries = _entries(paths, tick_period)
+    if definitions:
+        from fretc.fretish.fret_variables import fret_declarations
+
+        entries, notes = fret_declarations(entries, use=_MONITOR_USE)
+        for n in notes:
+            click.echo(_shown(f"note: {n}"), err=True)
+    return compile_entries(entries)
+
+
+#: how a runtime monitor uses a FRET definition (the notes of :func:`_load`)
+_MONITOR_USE = "in the monitor (its inputs are the variables the definition reads)"
 
 
 @click.command("compile")
@@ -86,7 +102,7 @@ def compile_cmd(files: tuple[str, ...], emit: str, as_json: bool, output: str | 
                 click.echo(_shown(str(c.error)), err=True)
             _write_json_list(sys.stdout, texts)
             sys.exit(1 if failed else 0)
-    compiled = _load(files, tick_period)
+    compiled = _load(files, tick_period, definitions=emit in ("monitor", "c", "c2po"))
     if not compiled:
         _no_requirements(files)
     failed = [c for c in compiled if c.error is not None]

@@ -1,0 +1,71 @@
+"""``fretc EXPORT --emit monitor`` (and ``c``, ``c2po``) of a FRET export whose requirement
+reads an Internal variable FRET's glossary defines: the monitor computes the variable from
+the variables its definition reads, as FRET's own monitors (Ogma's Copilot streams) do, so
+its inputs are those variables; each definition used is said once on stderr, and one fretc
+keeps free (a definition that reads itself through ``pre``) stays an input, with the reason.
+The monitor steps as the same requirement with the definition written out in FRETish."""
+
+from __future__ import annotations
+
+import json
+import runpy
+from pathlib import Path
+
+from click.testing import CliRunner
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from fretc.cli import main
+
+_VARIABLES = [
+    {"component_name": "ctrl", "variable_name": "a", "idType": "Input", "dataType": "boolean"},
+    {"component_name": "ctrl", "variable_name": "o", "idType": "Output", "dataType": "boolean"},
+    {"component_name": "ctrl", "variable_name": "rise", "idType": "Internal",
+     "dataType": "boolean", "assignment": "a and not pre a"},
+    {"component_name": "ctrl", "variable_name": "seen", "idType": "Internal",
+     "dataType": "boolean", "assignment": "a -> (a or pre seen)"},
+]
+
+
+def _monitors(tmp: Path, text: str, emit: str = "monitor") -> tuple[dict, str]:
+    """The module ``--emit monitor`` writes for the one-requirement export ``text`` (its
+    globals), and what the command printed on stderr."""
+    src = tmp / "p.json"
+    src.write_text(json.dumps({"requirements": [{"reqid": "R1", "fulltext": text}],
+                               "variables": _VARIABLES}), encoding="utf-8")
+    out = tmp / ("m.py" if emit == "monitor" else "out")
+    got = CliRunner().invoke(main, [str(src), "--emit", emit, "-o", str(out)])
+    assert got.exit_code == 0, got.output
+    return (runpy.run_path(str(out)) if emit == "monitor" else {"out": out}), got.stderr
+
+
+def test_the_monitor_reads_the_variables_the_definition_reads(tmp_path):
+    mod, err = _monitors(tmp_path, "whenever rise ctrl shall immediately satisfy o")
+    assert mod["MONITORS"]["R1"]().VARIABLES == ["a", "o"]
+    assert "note: rise: FRET defines it (Internal) as a and not pre a; that definition in " \
+           "the monitor" in err
+    # one that reads itself stays an input, and the note says why
+    mod, err = _monitors(tmp_path, "whenever seen ctrl shall immediately satisfy o")
+    assert sorted(mod["MONITORS"]["R1"]().VARIABLES) == ["o", "seen"]
+    assert "seen: FRET defines it (Internal) as a -> (a or pre seen); fretc reads it as a " \
+           "free variable: its definition reads itself" in err
+
+
+def test_the_c_monitor_reads_the_variables_the_definition_reads(tmp_path):
+    got, _err = _monitors(tmp_path, "whenever rise ctrl shall immediately satisfy o", "c")
+    header = next(got["out"].glob("*.h")).read_text(encoding="utf-8")
+    inputs = header.split("p_R1_inputs;")[0].rsplit("typedef struct {", 1)[1]
+    assert "/* a: boolean" in inputs and "/* o: boolean" in inputs and "rise" not in inputs
+
+
+@settings(max_examples=25, deadline=None)
+@given(st.lists(st.tuples(st.booleans(), st.booleans()), min_size=1, max_size=10))
+def test_the_monitor_steps_as_the_definition_written_out(tmp_path_factory, rows):
+    tmp = tmp_path_factory.mktemp("m")
+    defined = _monitors(tmp, "whenever rise ctrl shall immediately satisfy o")[0]
+    written = _monitors(tmp, "whenever a & !preBool(false, a) ctrl shall immediately "
+                             "satisfy o")[0]
+    m, w = defined["MONITORS"]["R1"](), written["MONITORS"]["R1"]()
+    samples = [{"a": a, "o": o} for a, o in rows]
+    assert m.run(samples) == w.run(samples)
+    assert (m.status, m.status_tick, m.finish()) == (w.status, w.status_tick, w.finish())
