@@ -20,11 +20,26 @@ enforced requirement, Safe-ROS's ``agilex_agent``):
 * ``N_shield.java``: the machines (node tables, the correction of
   :class:`fretc.shield.runtime.ShieldRuntime` with the same costs and ties), standard Java;
   its ``main`` steps lines of 0/1 strings, which the tests compare with the Python form.
+  An input that cannot be read is any value, as in the Python and C forms (the runtime's
+  ``decide_cases``, the C form's ``_cases``: the same cases in the same order, costs, ties,
+  :data:`~fretc.shield.runtime.CASES_LIMIT` and :data:`~fretc.shield.runtime.BELIEF_LIMIT`):
+  an input atom ``x`` reads such a variable, and the machine decides outputs safe in every
+  case, its state becoming a belief of several states (written ``s1|s2``, one part per
+  machine separated by ``/``, or ``lost``: the fallback's outputs until reset). A tick with
+  every atom read and one state per machine takes the single-state step as before.
 * ``N_env.java``: the verification environment: at each perception every input atom takes a
   value real numbers give (the machine's ``env_ok``) and the controller proposes ``push``
   (every output atom the opposite of the fallback's, as near as one message allows: the
   controller that always wants to move) or ``stop`` (the fallback's atoms), by AJPF's choice;
   the agent perceives the input atoms that hold and the proposal's name (``proposal(push)``).
+  With the setting ``N_env.unreadable = a,b`` (in an ``.ail`` file; default none, the
+  choices then exactly as without it) AJPF may also choose, for those input atoms, that they
+  cannot be read: the agent does not perceive such an atom, and the environment gives
+  ``shield/4`` the atom as unknown (``x``), so the agent's plans and properties are
+  unchanged: a property reads the atoms the agent perceived. The state the agent believes is
+  ``s(0,1,...)`` while the machine knows its one state, else ``s("TEXT")`` (the belief in
+  ``N_shield.java``'s notation); the outputs are ``none`` when there are none (a machine
+  lost without a fallback: ``decided`` does not hold).
 * ``N.ail``: the AIL configuration (the agent, its builder, the environment;
   ``ajpf.transition_every_reasoning_cycle = false``, so that AJPF's model states are the
   ticks: a property is read where a tick's inputs and its decided outputs are both believed).
@@ -52,6 +67,7 @@ from fretc.common.textsafe import (gwendolen_comment, java_comment, java_string,
 from fretc.shield.build import Shield
 from fretc.shield.machine import Machine, evaluate
 from fretc.shield.plan import ShieldError
+from fretc.shield.runtime import BELIEF_LIMIT, CASES_LIMIT
 
 __all__ = ["render_gwendolen", "AgentAtoms", "agent_atoms", "agent_name", "MAX_INPUT_ATOMS",
            "MAX_OUTPUT_ATOMS"]
@@ -190,7 +206,7 @@ def _machine_ctx(shield: Shield, atoms: AgentAtoms) -> list[dict[str, Any]]:
             "safe": m.safe, "nodes": ";".join(f"{v},{lo},{hi}" for v, lo, hi in m.nodes),
             "next": list(m.next), "assumed": list(m.assumed),
             "w_atom": [j for j, _w in weights], "w_want": [int(w[0]) for _j, w in weights],
-            "w_weight": [w[1] for _j, w in weights], "big": 1 << p,
+            "w_weight": [w[1] for _j, w in weights], "big": 1 << p, "env_ok": m.env_ok,
             "fallback": (list(shield.fallback["atoms"][k]) if shield.fallback is not None
                          else None)})
         o_start += len(m.outputs)
@@ -270,7 +286,7 @@ def render_gwendolen(shield: Shield, compiled: Sequence[Any], base: str) -> dict
            "init": [int(b) for m in shield.machines for b in m.init],
            "machines": _machine_ctx(shield, atoms), "valuations": valuations,
            "valuation_texts": [_valuation_text(v, atoms) for v in valuations],
-           "proposals": props}
+           "proposals": props, "cases_limit": CASES_LIMIT, "belief_limit": BELIEF_LIMIT}
     files = {f"{base}.gwen": _agent(shield, atoms, agent, base, _notes(shield)),
              f"{base}_shield.java": env.get_template("gwendolen_shield.java.j2").render(**ctx),
              f"{base}_env.java": env.get_template("gwendolen_env.java.j2").render(**ctx),
