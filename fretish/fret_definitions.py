@@ -25,6 +25,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from fretc.fretish import ast as A
+from fretc.fretish.limits import MAX_EXPR_DEPTH, depth
 from fretc.fretish.lustre import LustreError, parse_definition
 
 __all__ = ["Definitions", "definitions", "substitute", "constant_of", "MAX_EXPANSION_NODES"]
@@ -93,7 +94,9 @@ def definitions(variables: tuple[Any, ...]) -> Definitions:
         try:
             raw[v.name] = parse_definition(texts[v.name], is_boolean)
         except LustreError as exc:
-            free[v.name] = f"its definition is outside FRET's Lustre subset that fretc reads ({exc})"
+            free[v.name] = (f"its definition is {exc}" if str(exc).startswith("nested") else
+                            f"its definition is outside FRET's Lustre subset that fretc reads "
+                            f"({exc})")
     values: dict[str, A.Expr] = {}
     for name in sorted(raw):
         _expand(name, raw, values, free, ())
@@ -142,9 +145,13 @@ def _expand(name: str, raw: dict[str, A.Expr], values: dict[str, A.Expr],
     if name in free:
         return None
     if name in stack:
-        for n in stack[stack.index(name):]:
-            free.setdefault(n, "its definition reads itself (a stream with state, through "
-                               "pre): no expression of the other variables is it")
+        cycle = stack[stack.index(name):]
+        why = ("its definition reads itself (a stream with state, through pre): no "
+               "expression of the other variables is it" if _through_pre(cycle, raw) else
+               "its definition reads itself without pre (a cycle: Lustre defines no value "
+               "for it)")
+        for n in cycle:
+            free.setdefault(n, why)
         return None
     blocked: list[str] = []
 
@@ -167,6 +174,10 @@ def _expand(name: str, raw: dict[str, A.Expr], values: dict[str, A.Expr],
     if _size(out) > MAX_EXPANSION_NODES:
         free[name] = f"its expansion has more than {MAX_EXPANSION_NODES} nodes"
         return None
+    if depth(out) > MAX_EXPR_DEPTH:
+        free[name] = (f"its expansion is nested more than {MAX_EXPR_DEPTH} levels deep (the "
+                      "limit of a FRETish expression)")
+        return None
     values[name] = out
     return out
 
@@ -187,6 +198,27 @@ def substitute(e: Any, var: Any) -> Any:
     if isinstance(e, A.Call):
         return dataclasses.replace(e, args=tuple(substitute(a, var) for a in e.args))
     return e
+
+
+def _through_pre(cycle: tuple[str, ...], raw: dict[str, Any]) -> bool:
+    """Whether a definition of ``cycle`` (Internal variables that read each other round) reads
+    one of them inside ``pre`` (FRET's ``preBool``/``preInt``/``preReal``): a stream with
+    state, where a cycle without ``pre`` defines no value (Lustre's causality rule)."""
+    names = set(cycle)
+    for n in cycle:
+        stack: list = [(raw[n], False)]
+        while stack:
+            x, under = stack.pop()
+            if isinstance(x, A.Var) and under and x.name in names:
+                return True
+            if isinstance(x, A.Unary):
+                stack.append((x.operand, under))
+            elif isinstance(x, A.Binary):
+                stack += [(x.left, under), (x.right, under)]
+            elif isinstance(x, A.Call):
+                inside = under or x.name in ("preBool", "preInt", "preReal")
+                stack += [(a, inside) for a in x.args]
+    return False
 
 
 def _size(e: Any) -> int:

@@ -40,7 +40,7 @@ MAX_NUMBER_CHARS = 100
 MAX_DURATION_TICKS = 1_000_000
 
 __all__ = ["MAX_EXPR_DEPTH", "MAX_EXPR_NODES", "MAX_NUMBER_CHARS", "MAX_DURATION_TICKS",
-           "LimitError", "check_requirement", "check_expression", "duration_too_long"]
+           "LimitError", "check_requirement", "check_expression", "duration_too_long", "depth"]
 
 
 class LimitError(FretishError):
@@ -153,6 +153,22 @@ def check_expression(e: A.Expr) -> None:
 
 _DURATION_HINT = ("use a coarser tick period or a shorter duration; monitors keep up to one "
                   "bit per tick of a bounded duration")
+
+
+def depth(e: A.Expr) -> int:
+    """The nesting depth of the expression ``e`` as :func:`check_expression` counts it (an
+    operator one level, a call :data:`CALL_DEPTH`), without recursion."""
+    out, stack = 0, [(e, 1)]
+    while stack:
+        x, d = stack.pop()
+        out = max(out, d)
+        if isinstance(x, A.Unary):
+            stack.append((x.operand, d + 1))
+        elif isinstance(x, A.Binary):
+            stack += [(x.left, d + 1), (x.right, d + 1)]
+        elif isinstance(x, A.Call):
+            stack += [(a, d + CALL_DEPTH) for a in x.args]
+    return out
 
 
 def duration_too_long(ticks: Fraction | float) -> str:

@@ -34,6 +34,7 @@ import re
 from collections.abc import Callable
 
 from fretc.fretish import ast as A
+from fretc.fretish.limits import MAX_EXPR_DEPTH, depth
 
 __all__ = ["LustreError", "parse_definition"]
 
@@ -64,6 +65,9 @@ def parse_definition(text: str, is_boolean: Callable[[str], bool]) -> A.Expr:
         raise LustreError("nested too deeply") from None
     if p.peek() is not None:
         raise LustreError(f"unexpected {p.peek()!r} at character {p.offset()}")
+    if depth(e) > MAX_EXPR_DEPTH:  # (a long chain: a and b and ..., built without recursion)
+        raise LustreError(f"nested more than {MAX_EXPR_DEPTH} levels deep (the limit of a "
+                          "FRETish expression)")
     return e
 
 

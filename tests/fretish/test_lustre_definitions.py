@@ -157,6 +157,44 @@ def test_definitions_expand_through_each_other_and_recursive_ones_stay_free():
     assert "outside FRET's Lustre subset" in defs.free["bad"]
 
 
+def test_a_cycle_without_pre_and_a_definition_too_deep_stay_free_with_the_reason():
+    """A cycle without ``pre`` defines no value (not a stream with state); a chain of 3,000
+    ``and`` (built by the reader's loop, no recursion) or an expansion nested past FRETish's
+    200 levels stays free: no RecursionError later, in the substitution or the compiler."""
+    chain = " and ".join(["a"] * 3000)
+    half = " and ".join(["a"] * 150)
+    defs = definitions((
+        _var("a", kind="Input"), _var("p", "q"), _var("q", "not p"),
+        _var("long", chain), _var("half", half), _var("twice", "not (half or half)"),
+        _var("deeper", " or ".join(["twice"] * 2) + " or " + "not " * 60 + "twice")))
+    assert "without pre (a cycle" in defs.free["p"] and "without pre" in defs.free["q"]
+    assert "nested more than 200 levels deep" in defs.free["long"]
+    assert set(defs.values) == {"half", "twice"}
+    assert "nested more than 200 levels deep" in defs.free["deeper"]
+
+
+def test_a_deep_definition_is_no_internal_error_in_monitors_or_check(tmp_path):
+    """A FRET export whose definition is a chain of 3,000 ``and``: ``--emit monitor`` and
+    ``check`` read the variable as free (a note says why), exit 0/2, never 4."""
+    doc = {"requirements": [
+        {"reqid": "R1", "fulltext": "whenever d ctrl shall immediately satisfy o"}],
+        "variables": [
+        {"component_name": "ctrl", "variable_name": "a", "idType": "Input",
+         "dataType": "boolean"},
+        {"component_name": "ctrl", "variable_name": "o", "idType": "Output",
+         "dataType": "boolean"},
+        {"component_name": "ctrl", "variable_name": "d", "idType": "Internal",
+         "dataType": "boolean", "assignment": " and ".join(["a"] * 3000)}]}
+    path = tmp_path / "p.json"
+    path.write_text(json.dumps(doc), encoding="utf-8")
+    got = CliRunner().invoke(main, [str(path), "--emit", "monitor", "-o",
+                                    str(tmp_path / "m.py")])
+    assert got.exit_code == 0, got.output
+    assert "nested more than 200 levels deep" in got.stderr
+    got = CliRunner().invoke(main, ["check", str(path), "--no-progress"])
+    assert got.exit_code == 2 and "nested more than 200 levels deep" in got.output, got.output
+
+
 def test_check_reads_an_internal_variable_as_its_definition(tmp_path):
     """``hold`` is Internal, ``a and not b``: realizability is decided over the Inputs a, b
     (before, ``hold`` was a free variable declared neither input nor output: exit 2), and
