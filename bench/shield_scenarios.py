@@ -17,7 +17,8 @@ With ``--fault KIND`` (repeatable, :mod:`fretc.sim.faults`) every scenario and s
 again with the fault injected at each time of ``--fault-at S[,S...]`` (s of sim time: pick
 some before and some during an approach) for ``--fault-duration S`` (a sector fault on
 ``--fault-sector LO:HI`` degrees, the 90 degrees ahead by default), with both Safety Systems
-(``safety_restart``: the shield's node, or the hand-written SIF's agent):
+(``safety_restart``: the shield's node, or the hand-written SIF's agent); with
+``--no-sif-faults`` the hand-written SIF runs without a fault only (about half the runs):
 
     python bench/shield_scenarios.py --shield DIR --seeds 2 --scenario nominal \
         --fault all_nan --fault frozen --fault-at 10,27 --fault-duration 3
@@ -25,7 +26,8 @@ some before and some during an approach) for ``--fault-duration S`` (a sector fa
 Then per fault class (``none``: the runs without a fault) and Safety System: the runs,
 missions completed, aborted and ended in contact, the least clearance, the shield's
 overridden ticks; and each run that ended in contact under a fault (scenario, seed, the
-fault's start). Then the fault modes and effects as measured (the FMEA of docs/guide/shield.md,
+fault's start), and per fault class how many of the missions the SIF completes without a
+fault the shield completed under it. Then the fault modes and effects as measured (the FMEA of docs/guide/shield.md,
 "Sensor faults", written by this command; ``--markdown`` prints it as that page's table): per
 fault class, the requirements whose reasons the shield gave at its first override from the
 fault's start on, the latest of those first overrides after the start over the runs (s), the
