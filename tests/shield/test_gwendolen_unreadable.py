@@ -154,7 +154,9 @@ def unreadable_runs(seed: int, runs: int, ticks: int) -> list[list[tuple[dict, d
 
 @pytest.fixture(scope="module")
 def docs_java(tmp_path_factory) -> tuple[Path, Path]:
-    """The docs' forms and their Java machine compiled once: ``(folder, classes)``."""
+    """The docs' forms and their Java machine compiled once: ``(folder, classes)`` (a skip
+    without javac, before the forms are written)."""
+    _javac()
     folder = write_docs_forms(tmp_path_factory.mktemp("gwendolen-unreadable"))
     return folder, compile_java([folder / "safe_ros_shield.java"], folder / "classes")
 
@@ -299,8 +301,7 @@ def test_a_trigger_read_at_a_tick_of_an_unreadable_input_is_kept_by_the_java_for
 
 
 @settings(max_examples=8, deadline=None,
-          suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large,
-                                 HealthCheck.function_scoped_fixture])
+          suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
 @given(text=requirement_sets(), run=faulty_runs(length=30))
 @pytest.mark.tor("TOR-SHD-003")
 def test_random_requirements_with_unreadable_inputs_through_the_java_form(text, run):
