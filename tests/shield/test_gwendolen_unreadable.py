@@ -331,3 +331,21 @@ def test_random_requirements_with_unreadable_inputs_through_the_java_form(text, 
         src.write_text(files["t_shield.java"], encoding="utf-8")
         got = run_java(compile_java([src], Path(tmp) / "classes"), "t_shield", lines)
     assert got == want, [(a, b, c) for a, b, c in zip(lines, want, got) if b != c][:3]
+
+
+def test_without_a_fallback_a_machine_that_cannot_decide_gives_no_outputs(tmp_path):
+    """``x`` follows ``a`` exactly: no outputs are safe for both values of an unreadable
+    ``a``, and there is no fallback. The Python form gives no outputs and loses the machine's
+    state; the Java form prints ``none`` and ``lost``, and keeps giving none."""
+    compiled = compile_text("R1: whenever a sw shall immediately satisfy x\n"
+                            "R2: whenever !a sw shall immediately satisfy !x\n", tmp_path)
+    shield = build_shield(compiled, ["a"], ["x"], fork=False)
+    assert shield.fallback is None
+    files = render_gwendolen(shield, compiled, "n")
+    (tmp_path / "n_shield.java").write_text(files["n_shield.java"], encoding="utf-8")
+    classes = compile_java([tmp_path / "n_shield.java"], tmp_path / "classes")
+    lines, want = python_lines(ShieldRuntime(tables(shield)), [[
+        ({"a": True}, {"x": True}, {}), ({"a": True}, {"x": True}, {"a": None}),
+        ({"a": False}, {"x": True}, {})]])
+    assert [w.split()[:2] for w in want[1:]] == [["none", "lost"], ["none", "lost"]], want
+    assert run_java(classes, "n_shield", lines) == want
