@@ -12,6 +12,10 @@ file it points to; nor may a hard link to another file.
   ``open()`` would make the output), then rename it over the output's name (``rename(2)``
   replaces the directory entry, a link included: it never writes through it). A reader sees
   the old file or the whole new one; a failure leaves the old one and no temporary file.
+* A character device or a FIFO named by its own path (``-o /dev/null``) is written through,
+  as the shell's ``>`` writes it, and stays what it is (renaming over it, as root, made
+  ``/dev/null`` a regular file); a block device, a socket, or a link to one of those is
+  refused.
 * :func:`create_output` is for files written as they go (a recording): whatever is at the
   name (a file, a link) is removed, and the file is created exclusively without following a
   link (``O_EXCL | O_NOFOLLOW``, POSIX ``open()``: "If O_CREAT and O_EXCL are set, open()
@@ -61,6 +65,38 @@ def _fail(path: str | os.PathLike, exc: OSError, what: str = "cannot write") -> 
     return OutputError(f"{what} {os.fspath(path)}: {reason}")
 
 
+def _device(path: str) -> bool:
+    """True when ``path`` itself (not followed) is a character device or a FIFO the user
+    named (``-o /dev/null``, ``-o /dev/tty``, a named pipe): the output is written through
+    it, as a shell's ``>`` would, never renamed over it (as root that replaced ``/dev/null``
+    with a regular file). Raises :class:`OutputError` for what fretc does not write: a
+    block device or a socket, or a link to any of these (``/dev/stdout``: leave ``-o`` out
+    for the standard output); False for anything else (a file, a link to a file, nothing)."""
+    import stat
+
+    try:
+        st = os.lstat(path)
+    except OSError:
+        return False
+    if stat.S_ISCHR(st.st_mode) or stat.S_ISFIFO(st.st_mode):
+        return True
+    kind = (None if stat.S_ISREG(st.st_mode) or stat.S_ISDIR(st.st_mode) else
+            "a block device" if stat.S_ISBLK(st.st_mode) else
+            "a socket" if stat.S_ISSOCK(st.st_mode) else None)
+    if kind is None and stat.S_ISLNK(st.st_mode):
+        try:
+            to = os.stat(path).st_mode
+        except OSError:
+            return False
+        if not (stat.S_ISREG(to) or stat.S_ISDIR(to)):
+            kind = "a link to a device, a pipe or a socket"
+    if kind is not None:
+        raise OutputError(f"cannot write {path}: it is {kind}; fretc writes files (or a "
+                          "character device or named pipe given by its own name, such as "
+                          "/dev/null)")
+    return False
+
+
 def _temporary(path: str) -> tuple[int, str]:
     """A new file beside ``path`` (``.NAME.XXXXXXXX.tmp``) created exclusively, never through a
     link; its descriptor and name. Raises OSError."""
@@ -89,6 +125,16 @@ def open_output(path: str | os.PathLike, mode: str = "w", *, encoding: str | Non
     if mode not in ("w", "wb"):
         raise ValueError(f"open_output writes a whole file (mode 'w' or 'wb'), not {mode!r}")
     target = os.fspath(path)
+    if _device(target):  # (written through, as the shell's > does)
+        try:
+            with open(target, mode, encoding=encoding if mode == "w" else None,
+                      newline=newline if mode == "w" else None) as dev:
+                yield dev
+        except OSError as exc:
+            if isinstance(exc, OutputError) or exc.filename not in (None, target):
+                raise
+            raise _fail(target, exc) from None
+        return
     try:
         fd, tmp = _temporary(target)
     except OSError as exc:
@@ -135,6 +181,11 @@ def create_output(path: str | os.PathLike) -> BinaryIO:
     Raises:
         OutputError: a folder at ``path``, or the file cannot be made."""
     target = os.fspath(path)
+    if _device(target):  # (written through, never removed: /dev/null stays a device)
+        try:
+            return cast(BinaryIO, open(target, "wb"))
+        except OSError as exc:
+            raise _fail(target, exc) from None
     try:
         with contextlib.suppress(FileNotFoundError):
             os.unlink(target)  # a link is removed itself, never what it points to

@@ -91,6 +91,37 @@ def test_create_output_removes_a_link_and_creates_exclusively(tmp_path, victim):
     assert not out.is_symlink()
 
 
+@pytest.mark.skipif(not os.path.exists("/dev/null"), reason="no /dev/null on this system")
+def test_a_device_or_fifo_named_as_the_output_is_written_through_and_stays_one(tmp_path):
+    """``-o /dev/null`` discards the output as the shell's ``>`` does: /dev/null stays a
+    character device (renaming a temporary file over it made it a regular file when fretc
+    ran as root; as any other user it was a permission error). A FIFO named as the output
+    gets the bytes; a link to a device is refused (a link planted in a shared folder must
+    not make fretc write to a device), naming it."""
+    import threading
+
+    from fretc.common import outputs
+
+    outputs.write_file("/dev/null", "discarded\n")
+    with outputs.create_output("/dev/null") as f:
+        f.write(b"discarded")
+    assert stat.S_ISCHR(os.lstat("/dev/null").st_mode)
+    fifo = tmp_path / "p"
+    os.mkfifo(fifo)
+    got: list[bytes] = []
+    reader = threading.Thread(target=lambda: got.append(fifo.read_bytes()))
+    reader.start()
+    outputs.write_file(fifo, "through the pipe\n")
+    reader.join(timeout=30)
+    assert got == [b"through the pipe\n"] and stat.S_ISFIFO(os.lstat(fifo).st_mode)
+    link = tmp_path / "out.txt"
+    link.symlink_to("/dev/null")
+    with pytest.raises(outputs.OutputError) as err:
+        outputs.write_file(link, "x")
+    assert str(link) in str(err.value) and "a link to a device" in str(err.value)
+    assert link.is_symlink()
+
+
 def test_sub_folder_refuses_a_link_or_a_file(tmp_path):
     from fretc.common import outputs
 
