@@ -29,7 +29,7 @@ from pathlib import Path
 HERE = Path(__file__).parent
 #: the severities of a known problem (what the problem does to a user's result)
 SEVERITIES = ("wrong verdict", "refuses valid input", "accepts invalid input", "diagnostic",
-              "performance")
+              "performance", "side effect")
 #: the uses of a requirement (IEC 61508-3 7.4.4.2's tool classes)
 USES = ("T2", "T3")
 TOR_ID = re.compile(r"TOR-[A-Z]{3}-\d{3}")
