@@ -41,6 +41,7 @@ from __future__ import annotations
 
 import contextlib
 import os
+import stat
 from collections.abc import Iterable, Iterator
 from typing import IO, Any, BinaryIO, cast
 
@@ -72,8 +73,6 @@ def _device(path: str) -> bool:
     with a regular file). Raises :class:`OutputError` for what fretc does not write: a
     block device or a socket, or a link to any of these (``/dev/stdout``: leave ``-o`` out
     for the standard output); False for anything else (a file, a link to a file, nothing)."""
-    import stat
-
     try:
         st = os.lstat(path)
     except OSError:

@@ -26,7 +26,7 @@ from typing import Any
 
 from fretc.fretish import ast as A
 from fretc.fretish.limits import MAX_EXPR_DEPTH, depth
-from fretc.fretish.lustre import LustreError, parse_definition
+from fretc.fretish.lustre import LustreError, LustreTooDeep, parse_definition
 
 __all__ = ["Definitions", "definitions", "substitute", "constant_of", "MAX_EXPANSION_NODES"]
 
@@ -94,7 +94,7 @@ def definitions(variables: tuple[Any, ...]) -> Definitions:
         try:
             raw[v.name] = parse_definition(texts[v.name], is_boolean)
         except LustreError as exc:
-            free[v.name] = (f"its definition is {exc}" if str(exc).startswith("nested") else
+            free[v.name] = (f"its definition is {exc}" if isinstance(exc, LustreTooDeep) else
                             f"its definition is outside FRET's Lustre subset that fretc reads "
                             f"({exc})")
     values: dict[str, A.Expr] = {}

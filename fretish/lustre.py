@@ -36,7 +36,7 @@ from collections.abc import Callable
 from fretc.fretish import ast as A
 from fretc.fretish.limits import MAX_EXPR_DEPTH, depth
 
-__all__ = ["LustreError", "parse_definition"]
+__all__ = ["LustreError", "LustreTooDeep", "parse_definition"]
 
 _TOKEN = re.compile(r"\s*(?:(?P<num>(?:[0-9]+(?:\.[0-9]*)?|\.[0-9]+)(?:[eE][-+]?[0-9]+)?)"
                     r"|(?P<name>[A-Za-z_][A-Za-z0-9_]*)"
@@ -51,6 +51,11 @@ class LustreError(ValueError):
     """A definition outside FRET's Lustre subset (the module docstring), with the reason."""
 
 
+class LustreTooDeep(LustreError):
+    """A definition inside the subset but nested past what fretc reads (a FRETish
+    expression's :data:`fretc.fretish.limits.MAX_EXPR_DEPTH` levels)."""
+
+
 def parse_definition(text: str, is_boolean: Callable[[str], bool]) -> A.Expr:
     """The FRETish expression of the Lustre definition ``text`` (module docstring);
     ``is_boolean(name)`` says whether a variable of the glossary is boolean.
@@ -62,11 +67,11 @@ def parse_definition(text: str, is_boolean: Callable[[str], bool]) -> A.Expr:
     try:
         e = p.expr()
     except RecursionError:
-        raise LustreError("nested too deeply") from None
+        raise LustreTooDeep("nested too deeply") from None
     if p.peek() is not None:
         raise LustreError(f"unexpected {p.peek()!r} at character {p.offset()}")
     if depth(e) > MAX_EXPR_DEPTH:  # (a long chain: a and b and ..., built without recursion)
-        raise LustreError(f"nested more than {MAX_EXPR_DEPTH} levels deep (the limit of a "
+        raise LustreTooDeep(f"nested more than {MAX_EXPR_DEPTH} levels deep (the limit of a "
                           "FRETish expression)")
     return e
 
