@@ -31,6 +31,7 @@ from fretc.audit.columns import ClockPass
 from fretc.audit.passes import clock_key
 from fretc.audit.trials import trigger_trials
 from fretc.audit.unknown_ticks import judge_three
+from fretc.audit.streams import with_streams
 from fretc.common.problems import NAN
 from fretc.compiler.ir import walk
 from fretc.monitors.vectorized import supports
@@ -77,12 +78,15 @@ def finalize(plan: AuditPlan, r: RequirementPlan, res: ClockPass, bindings: Bind
     from its clock's pass ``res``: engine, LTL3 verdict, interval counts, and for a
     violation the first violation with the values and message log times around it. Ticks
     a gap or a NaN leaves unknown are judged in three-valued semantics
-    (:mod:`fretc.audit.unknown_ticks`). ``la`` is the log's
+    (:mod:`fretc.audit.unknown_ticks`); the stream variables it reads are computed first
+    (:func:`fretc.audit.streams.with_streams`). ``la`` is the log's
     :class:`fretc.audit.verdict.LogAudit`. A requirement with a probability bound also gets
     its triggers as trials (:mod:`fretc.audit.trials`). ``rob``: the pt formula's robustness
     over the pass's ticks when computed already (:func:`fretc.monitors.judge.judge`);
     ``ltl3``: its LTL3 verdict and tick over the pass's ticks, and how many ticks that was,
     when computed already (:func:`fretc.monitors.judge.ltl3_verdicts`)."""
+    if r.streams is not None:  # (the columns of the stream variables it reads)
+        res = with_streams(r, res, _nan_unknown(bindings))
     res, nan_unknown = prepare(r, res, bindings, v, la)
     n = len(res.times)
     if n == 0:
@@ -209,7 +213,7 @@ def unknown_of(r: RequirementPlan, res: ClockPass, nan_unknown: bool) -> np.ndar
     variables unknown, or (``nan_unknown``) one of its comparisons reads NaN."""
     n = len(res.times)
     out = np.zeros(n, np.bool_)
-    for name in r.variables:
+    for name in (*r.variables, *r.stream_names):
         m = res.unknown.get(name)
         if m is not None:
             out |= m[:n]
@@ -508,7 +512,7 @@ def _values_around(window: int, r: RequirementPlan, res: ClockPass, bindings: Bi
     times at the ticks within ``window`` of its first violation (:func:`shown_ticks`)."""
     times = res.times
     ticks = shown_ticks(window, v, len(times))
-    for name in r.variables:
+    for name in (*r.variables, *r.stream_names):
         col = res.columns.get(name)
         if col is None:
             continue

@@ -31,7 +31,8 @@ class RequirementPlan:
         compiled: the :class:`fretc.compiler.build.Compiled` (None if the period check failed).
         monitor_cls: the generated monitor class (``MONITORS[id]`` of its module), or None.
         variables: the FRET variables the monitor reads (``VARIABLES``), then any others of
-            the formalization.
+            the formalization: those read from the log (a stream variable FRET defines,
+            :attr:`streams`, is not; the variables it reads are).
         error: why it cannot be audited (parse/formalization error, no monitor, tick period
             mismatch), or None.
         notes: warnings of the formalization.
@@ -67,6 +68,20 @@ class RequirementPlan:
     def requirement(self) -> Requirement | None:
         """The parsed requirement (:class:`fretc.fretish.ast.Requirement`), or None."""
         return self.compiled.requirement if self.compiled is not None else None
+
+    @property
+    def streams(self) -> Any:
+        """The stream variables it reads, computed from the log's columns
+        (:class:`fretc.fretish.fret_streams.StreamSystem`; their inputs are among
+        ``variables``, they are not), or None."""
+        return getattr(self.compiled.entry, "streams", None) if self.compiled is not None \
+            else None
+
+    @property
+    def stream_names(self) -> tuple[str, ...]:
+        """The names of :attr:`streams`' variables (none: ``()``)."""
+        system = self.streams
+        return system.names if system is not None else ()
 
     @property
     def monitor_source(self) -> MonitorSource:

@@ -110,7 +110,10 @@ def _with_definitions(entries: list, bindings: Bindings | None, notes: list[str]
     """``entries`` with the Internal variables their FRET export defines, and the bindings
     do not bind, read as their definitions (FRET's glossary:
     :func:`fretc.fretish.fret_variables.with_fret_definitions`), each such variable named
-    once in ``notes``; a bound one is read from the log, as every bound variable is."""
+    once in ``notes``; a bound one is read from the log, as every bound variable is. A
+    stream variable (a definition reading itself through ``pre``) is the entry's
+    ``streams``, its column computed tick by tick from the columns of the variables it
+    reads (:mod:`fretc.audit.streams`), named once in ``notes`` too."""
     from fretc.fretish.fret_definitions import definitions
     from fretc.fretish.fret_variables import names_read, with_fret_definitions
 
@@ -121,14 +124,22 @@ def _with_definitions(entries: list, bindings: Bindings | None, notes: list[str]
         if not getattr(e, "variables", ()) or e.requirement is None:
             out.append(e)
             continue
-        defs = definitions(tuple(e.variables)).values
-        used = sorted(n for n in names_read([e]) if n in defs and n not in bound)
-        for n in used:
+        defs = definitions(tuple(e.variables))
+        read = names_read([e])
+        used = sorted(n for n in read if n in defs.values and n not in bound)
+        if used or any(n in defs.streams and n not in bound for n in read):
+            e = with_fret_definitions(e, keep=bound, streams=True)
+        computed = [(n, "computed from the variables it reads (no binding of its own)")
+                    for n in used]
+        if e.streams is not None:
+            computed += [(n, "computed tick by tick from the variables it reads (a stream "
+                          "with state: it reads itself through pre; no binding of its own)")
+                         for n in e.streams.names]
+        for n, how in sorted(computed):
             if n not in said:
                 said.add(n)
-                notes.append(f"{n}: FRET's definition of this Internal variable computed "
-                              "from the variables it reads (no binding of its own)")
-        out.append(with_fret_definitions(e, keep=bound) if used else e)
+                notes.append(f"{n}: FRET's definition of this Internal variable {how}")
+        out.append(e)
     return out
 
 
@@ -165,6 +176,7 @@ def _build_plan(config: AuditConfig, files: list[tuple[Path, Bindings]]) -> Audi
         _attach(rp, c, classes, skipped)
         if (c.entry.source, c.id) in sources:  # the automata built with the module, not again
             rp._msource = sources[(c.entry.source, c.id)]
+    _streams_per_entity(plans, bindings)
     bindings = _with_elements(bindings, plans, notes)
     csv_period = bindings.tick.period_ns if (bindings is not None
                                              and bindings.tick.period_ns) else None
@@ -325,18 +337,43 @@ def _attach(rp: RequirementPlan, c, classes: dict[tuple[str, str], type],
     elif key in classes:
         rp.monitor_cls = classes[key]
         names = list(rp.monitor_cls.VARIABLES)  # type: ignore[attr-defined]  # a generated monitor class
-        rp.variables = names + [v for v in c.formalization.variables if v not in names]
+        rp.variables = _read_from_log(rp, names + [v for v in c.formalization.variables
+                                                   if v not in names])
         rp.notes.extend(c.formalization.warnings)
     elif not c.formalization.pt_causal:
         # a future-time function in the pt formula: no online monitor, but the audit is
         # offline - decide it by the interval semantics over the whole trace
         rp.offline = True
-        rp.variables = list(c.formalization.variables)
+        rp.variables = _read_from_log(rp, list(c.formalization.variables))
         rp.notes.extend(c.formalization.warnings)
         rp.notes.append("no online monitor (the pt formula needs a future-time function): "
                         "decided offline by the interval semantics; no LTL3 verdict")
     else:
         rp.error = f"no monitor: {skipped.get(key, 'not generated')}"
+
+
+def _streams_per_entity(plans: list[RequirementPlan], bindings: Bindings | None) -> None:
+    """A requirement judged per entity (it reads a ``$name`` variable) that reads a stream
+    variable is an error saying so: the per-entity audit judges entities together from
+    their columns chunk by chunk, where the stream's column is not computed."""
+    per_entity = set(bindings.per_entity) if bindings is not None else set()
+    for rp in plans:
+        system = rp.streams
+        if rp.error is None and system is not None and per_entity & set(rp.variables):
+            rp.error = (f"it reads {', '.join(system.names)}, which FRET defines as a stream "
+                        "with state (through pre), and variables per entity: the audit "
+                        "per entity does not compute such a stream; bind "
+                        f"{', '.join(system.names)} per entity instead")
+
+
+def _read_from_log(rp: RequirementPlan, names: list[str]) -> list[str]:
+    """The variables of ``names`` (a requirement's) read from the log: its stream
+    variables' inputs in place of the stream variables (:mod:`fretc.audit.streams`)."""
+    system = rp.streams
+    if system is None:
+        return names
+    out = [n for n in names if n not in system.names]
+    return out + [n for n in system.inputs if n not in out]
 
 
 def used_variables(plans: list[RequirementPlan]) -> set[str]:

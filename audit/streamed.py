@@ -112,6 +112,8 @@ def unstreamed_reason(plan: AuditPlan, r: RequirementPlan) -> str | None:
         return "not judged"
     if plan.coverage:
         return "--coverage records obligations over the whole trace"
+    if r.streams is not None:  # (its columns computed from the whole pass: audit.streams)
+        return "it reads a stream variable FRET defines (through pre), computed whole"
     if getattr(r.compiled, "probability", None) is not None:
         return "its triggers are trials (a probability bound)"
     why = stream_unsupported(req)

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from fractions import Fraction
+from typing import Any
 
 from fretc.common.errors import FretishError
 
@@ -98,3 +99,7 @@ class RequirementEntry:
     #: (:class:`fretc.fretish.fret_variables.FretVariable`; ``inputs``/``outputs`` are its
     #: Input and Output ones); empty for other files
     variables: tuple = ()
+    #: the stream variables of its FRET export it reads, computed tick by tick from the
+    #: variables they read (:class:`fretc.fretish.fret_streams.StreamSystem`; set by
+    #: :func:`fretc.fretish.fret_variables.with_fret_definitions` with ``streams``), or None
+    streams: Any = None

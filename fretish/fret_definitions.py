@@ -55,11 +55,17 @@ def constant_of(v: Any) -> A.Expr | None:
 class Definitions:
     """``values``: Internal variable -> its expanded expression (constants included);
     ``free``: Internal variable with an assignment fretc does not expand -> why (one
-    clause); ``texts``: variable -> its assignment as FRET wrote it."""
+    clause); ``texts``: variable -> its assignment as FRET wrote it; ``streams``: the
+    free ones that are streams with state fretc computes tick by tick (a definition that
+    reads itself or another of them through ``pre``, or reads one of them; each also in
+    ``free``, which the analyses keep free) -> its definition as read (the variables it
+    reads not expanded), in an order where each reads the earlier ones only outside ``pre``
+    (:mod:`fretc.fretish.fret_streams`)."""
 
     values: dict[str, A.Expr]
     free: dict[str, str]
     texts: dict[str, str]
+    streams: dict[str, A.Expr] = dataclasses.field(default_factory=dict)
 
 
 @functools.lru_cache(maxsize=256)
@@ -100,7 +106,7 @@ def definitions(variables: tuple[Any, ...]) -> Definitions:
     values: dict[str, A.Expr] = {}
     for name in sorted(raw):
         _expand(name, raw, values, free, ())
-    return Definitions(values, free, texts)
+    return Definitions(values, free, texts, _streams(raw, values, free))
 
 
 def _mode(text: str, is_boolean: Any) -> A.Expr:
@@ -219,6 +225,91 @@ def _through_pre(cycle: tuple[str, ...], raw: dict[str, Any]) -> bool:
                 inside = under or x.name in ("preBool", "preInt", "preReal")
                 stack += [(a, inside) for a in x.args]
     return False
+
+
+#: the clause :func:`_expand` gives a definition on a cycle through ``pre``
+_STATE = "its definition reads itself (a stream with state"
+#: FRET's functions a stream's definition may call (Lustre's ``if`` and ``pre``)
+_STREAM_CALLS = frozenset({"ite", "preBool", "preInt", "preReal"})
+
+
+def _streams(raw: dict[str, A.Expr], values: dict[str, A.Expr],
+             free: dict[str, str]) -> dict[str, A.Expr]:
+    """The free definitions of ``raw`` that are streams with state (:class:`Definitions`'
+    ``streams``): those on a cycle through ``pre``, then those reading only them and
+    expanded definitions, without a call other than ``if``/``pre`` (a glossary function
+    has no value fretc knows), and with no cycle outside ``pre`` among them (Lustre's
+    causality rule); in evaluation order (dependencies first, then by name)."""
+    state = {n for n, why in free.items() if n in raw and why.startswith(_STATE)}
+    grown = True
+    while grown:
+        grown = False
+        for n in sorted(set(free) - state):
+            reads = _reads(raw.get(n), raw)
+            if n in raw and free[n].startswith("it reads ") and reads & state \
+                    and all(r in values or r in state for r in reads):
+                state.add(n)
+                grown = True
+    state = {n for n in state if all(_computable(x) for x in A.walk(raw[n]))}
+    while True:  # (drop those reading a dropped one, until none is)
+        order = _causal_order(state, raw)
+        keep = {n for n in order if all(
+            r in order or (r in values and all(_computable(x) for x in A.walk(values[r])))
+            for r in _reads(raw[n], raw))}
+        if keep == state:
+            return {n: raw[n] for n in order}
+        state = keep
+
+
+def _computable(x: A.Expr) -> bool:
+    """Whether the node ``x`` is one a stream is computed with: not a call other than
+    ``if`` and ``pre``, a ``pre`` whose first value is a literal (Lustre's reading)."""
+    if not isinstance(x, A.Call):
+        return True
+    if x.name == "ite":
+        return True
+    return x.name in _STREAM_CALLS and isinstance(x.args[0], (A.BoolLit, A.NumLit))
+
+
+def _reads(e: A.Expr | None, raw: dict[str, A.Expr]) -> set[str]:
+    """The definitions of ``raw`` that ``e`` reads (None: none)."""
+    if e is None:
+        return set()
+    return {x.name for x in A.walk(e) if isinstance(x, A.Var) and x.name in raw}
+
+
+def _now_reads(e: A.Expr, names: set[str]) -> set[str]:
+    """The ``names`` that ``e`` reads outside ``pre`` (at the same tick)."""
+    out, stack = set(), [e]
+    while stack:
+        x = stack.pop()
+        if isinstance(x, A.Var) and x.name in names:
+            out.add(x.name)
+        elif isinstance(x, A.Unary):
+            stack.append(x.operand)
+        elif isinstance(x, A.Binary):
+            stack += [x.left, x.right]
+        elif isinstance(x, A.Call) and x.name not in ("preBool", "preInt", "preReal"):
+            stack += list(x.args)
+    return out
+
+
+def _causal_order(state: set[str], raw: dict[str, A.Expr]) -> list[str]:
+    """``state`` in an order where each reads the earlier ones only at the same tick
+    (Kahn's algorithm, the least name first); those on a cycle outside ``pre`` (or after
+    one) are left out."""
+    deps = {n: _now_reads(raw[n], state) - {n} for n in state}
+    selfish = {n for n in state if n in _now_reads(raw[n], state)}
+    order: list[str] = []
+    ready = sorted(n for n in state if not deps[n] and n not in selfish)
+    done: set[str] = set()
+    while ready:
+        n = ready.pop(0)
+        order.append(n)
+        done.add(n)
+        ready = sorted(set(ready) | {m for m in state - done - selfish - set(ready)
+                                     if deps[m] <= done})
+    return order
 
 
 def _size(e: Any) -> int:

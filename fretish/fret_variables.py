@@ -33,6 +33,7 @@ from typing import Any
 from fretc.common.errors import FretishFileError
 from fretc.fretish import ast as A
 from fretc.fretish.fret_definitions import constant_of, definitions, substitute
+from fretc.fretish.fret_streams import STREAM_NOTE, stream_system
 
 __all__ = ["FretVariable", "fret_variables", "declare", "unused", "INTEGER_TYPES",
            "with_fret_definitions", "constant_of", "names_read", "fret_declarations"]
@@ -109,19 +110,36 @@ def declare(entry: Any, declared: list[FretVariable]) -> None:
     entry.outputs = tuple(dict.fromkeys(v.name for v in own if v.kind == "Output"))
 
 
-def with_fret_definitions(entry: Any, keep: Collection[str] = ()) -> Any:
+def with_fret_definitions(entry: Any, keep: Collection[str] = (), streams: bool = False
+                          ) -> Any:
     """``entry`` (:class:`fretc.fretish.entry.RequirementEntry`) with each Internal variable
     of its FRET export that FRET defines replaced by its definition in its requirement's
     expressions (conditions, response, stop condition, a scope's condition or mode): a
     literal by that constant, a Lustre expression by its FRETish reading with the Internal
     variables it reads expanded (:mod:`fretc.fretish.fret_definitions`); those fretc keeps
     free stay variables, and so do those in ``keep`` (``fretc audit``: the variables the
-    bindings bind, read from the log). The entry itself when there is none."""
+    bindings bind, read from the log). With ``streams`` (the audit, the runtime monitors),
+    the stream variables it then reads (a definition reading itself through ``pre``) are
+    its ``streams``, computed tick by tick from the variables they read
+    (:func:`fretc.fretish.fret_streams.stream_system`). The entry itself when there is
+    none of either."""
     values = {k: v for k, v in definitions(tuple(entry.variables)).values.items()
               if k not in keep}
     req = entry.requirement
-    if not values or req is None or req.freeform:
+    if req is None or req.freeform:
         return entry
+    out = _substituted(entry, values) if values else entry
+    if streams:
+        system = stream_system(tuple(entry.variables), names_read([out]), keep)
+        if system is not None:
+            out = dataclasses.replace(out, streams=system)
+    return out
+
+
+def _substituted(entry: Any, values: dict[str, A.Expr]) -> Any:
+    """``entry`` with the variables of ``values`` replaced by their expressions
+    (:func:`with_fret_definitions`)."""
+    req = entry.requirement
 
     def sub(e: Any) -> Any:
         return substitute(e, lambda v: values.get(v.name, v))
@@ -156,22 +174,28 @@ ANALYSIS_USE = "in the analysis (the emitted formulas keep its name)"
 
 
 def unused(variables: list[FretVariable] | tuple[FretVariable, ...], read: set[str],
-           whole: Collection[str] = (), use: str = ANALYSIS_USE) -> list[str]:
+           whole: Collection[str] = (), use: str = ANALYSIS_USE,
+           streams: bool = False) -> list[str]:
     """What the FRET declarations of the variables in ``read`` say, and how fretc reads
     it, one sentence per variable (sorted by name): an Internal variable's definition used
     (:func:`with_fret_definitions`) or why it is not (then a free variable), a Mode or Function
     read as a free variable, an integer type; ``whole``: the variables the shield gives
     whole numbers (its outputs declared ``integer``), whose type is used; ``use`` how a
     definition used is used (after "that definition"). ``read`` is closed over the
-    definitions: a variable an expanded definition reads is read."""
+    definitions: a variable an expanded definition reads is read. ``streams``: the stream
+    variables (a definition reading itself through ``pre``) are computed tick by tick (the
+    runtime monitors: :mod:`fretc.fretish.fret_streams`), not free."""
     defs = definitions(tuple(variables))
-    read = _through_definitions(read, defs.values)
+    read = _through_definitions(read, {**defs.values, **(defs.streams if streams else {})})
     out = []
     for v in sorted((v for v in variables if v.name in read), key=lambda v: v.name):
         if v.kind == "Internal" and v.name in defs.values:
             what = "constant" if constant_of(v) is not None else "definition"
             out.append(f"{v.name}: FRET defines it (Internal) as {_short(v.assignment)}; "
                        f"that {what} {use}")
+        elif v.kind == "Internal" and streams and v.name in defs.streams:
+            out.append(f"{v.name}: FRET defines it (Internal) as {_short(v.assignment)}; "
+                       f"that definition is {STREAM_NOTE}, {use}")
         elif v.kind == "Internal" and v.assignment.strip():
             out.append(f"{v.name}: FRET defines it (Internal) as {_short(v.assignment)}; "
                        f"fretc reads it as a free variable: {defs.free.get(v.name, '')}")
@@ -211,15 +235,15 @@ def _short(text: str, limit: int = 160) -> str:
     return one if len(one) <= limit else one[:limit - 3] + "..."
 
 
-def fret_declarations(entries: list, whole: Collection[str] = (), use: str = ANALYSIS_USE
-                      ) -> tuple[list, list[str]]:
+def fret_declarations(entries: list, whole: Collection[str] = (), use: str = ANALYSIS_USE,
+                      streams: bool = False) -> tuple[list, list[str]]:
     """``entries`` with their FRET export's definitions applied
-    (:func:`with_fret_definitions`), and the notes of :func:`unused` (``whole`` and ``use``
-    as there) over
-    the variables they read as written (``fretc check``'s and ``fretc shield``'s);
+    (:func:`with_fret_definitions`, with ``streams`` as there: the runtime monitors), and
+    the notes of :func:`unused` (``whole``, ``use`` and ``streams`` as there) over the
+    variables they read as written (``fretc check``'s and ``fretc shield``'s);
     ``entries`` and no note when none comes from an export that declares variables."""
     declared = list({(v.component, v.name): v for e in entries for v in e.variables}.values())
     if not declared:
         return entries, []
-    notes = unused(declared, names_read(entries), whole, use)
-    return [with_fret_definitions(e) for e in entries], notes
+    notes = unused(declared, names_read(entries), whole, use, streams)
+    return [with_fret_definitions(e, streams=streams) for e in entries], notes

@@ -315,7 +315,8 @@ def test_entry_fields_in_the_order_the_reader_passes_them():
     from fretc.fretish import files
     assert tuple(f.name for f in dataclasses.fields(files.RequirementEntry)) == (
         "id", "text", "source", "line", "column", "rationale", "parent", "tick_period",
-        "requirement", "error", "extra", "inputs", "outputs", "origin", "variables")
+        "requirement", "error", "extra", "inputs", "outputs", "origin", "variables",
+        "streams")
 
 
 def test_inputs_and_outputs_name_quoted_variables_as_the_requirements_write_them(tmp_path):

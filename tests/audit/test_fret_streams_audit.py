@@ -1,0 +1,193 @@
+"""``fretc audit`` of a FRET export whose requirement reads an Internal variable defined as a
+stream with state (its Lustre definition reads itself through ``pre``: FRET's LMCPS
+``psiAtZero`` and ``rollAtZero``), bound by nothing: its column is computed tick by tick
+from the log's columns of the variables it reads (audit/streams.py), and every verdict
+equals the one of the same requirement over a trace that carries the column a plain Python
+loop of the Lustre definition computes (written out here), whichever CSV judge runs
+(streamed on or off); with unknown cells, the verdict is that one or ``unknown``, never
+another (sound)."""
+
+from __future__ import annotations
+
+import json
+import math
+
+from click.testing import CliRunner
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+import fretc.audit.streamed as streamed
+from fretc.cli import main
+
+PSI = "Psi -> if (hdg and not pre hdg) then Psi else pre psiAtZero"
+ROLL = ("roll_angle -> if (autopilot_engaged and not hdg and not pre (autopilot_engaged and "
+        "not hdg)) then roll_angle else pre rollAtZero")
+REQUIREMENTS = [
+    ("AP-010bv2", "when in hdg Autopilot shall always satisfy (Psi - (HDGmodeCmd - psiAtZero))"
+                  "/(HDGmodeCmd - psiAtZero) <=0.1"),
+    ("AP-004b", "while (autopilot_engaged & !hdg) Autopilot shall always satisfy (roll_angle - "
+                "roll_cmd - rollAtZero)/(roll_cmd - rollAtZero) <= 0.1"),
+    ("P1", "Autopilot shall always satisfy Psi - psiAtZero <= 5"),
+    ("P2", "whenever hdg Autopilot shall immediately satisfy rollAtZero >= psiAtZero - 4"),
+]
+INPUTS = [("Psi", "double"), ("hdg", "boolean"), ("autopilot_engaged", "boolean"),
+          ("roll_angle", "double"), ("roll_cmd", "double"), ("HDGmodeCmd", "double")]
+
+
+def reference(rows: list[dict]) -> list[tuple[float, float]]:
+    """(psiAtZero, rollAtZero) at each row, by Lustre's semantics written out: ``a -> b`` is
+    ``a`` at the first tick, ``pre e`` is ``e`` at the previous one."""
+    out: list[tuple[float, float]] = []
+    for t, r in enumerate(rows):
+        engaged = r["autopilot_engaged"] and not r["hdg"]
+        if t == 0:
+            psi, roll = r["Psi"], r["roll_angle"]
+        else:
+            prev = rows[t - 1]
+            psi = r["Psi"] if (r["hdg"] and not prev["hdg"]) else out[-1][0]
+            was = prev["autopilot_engaged"] and not prev["hdg"]
+            roll = r["roll_angle"] if (engaged and not was) else out[-1][1]
+        out.append((psi, roll))
+    return out
+
+
+def export(defined: bool) -> dict:
+    """An LMCPS-like export: the two stream variables defined (``defined``), else Inputs."""
+    variables = [{"component_name": "Autopilot", "variable_name": n, "idType": "Input",
+                  "dataType": t} for n, t in INPUTS]
+    for name, text in (("psiAtZero", PSI), ("rollAtZero", ROLL)):
+        variables.append({"component_name": "Autopilot", "variable_name": name,
+                          "idType": "Internal" if defined else "Input", "dataType": "double",
+                          "assignment": text if defined else ""})
+    return {"requirements": [{"reqid": i, "fulltext": t} for i, t in REQUIREMENTS],
+            "variables": variables}
+
+
+def _cell(x, unknown: bool = False) -> str:
+    if unknown:
+        return "unknown"
+    return str(x).lower() if isinstance(x, bool) else repr(float(x))
+
+
+def audit(tmp, doc: dict, rows: list[dict], columns: list[str], unknown=frozenset(),
+          whole: bool = False) -> tuple[list, str]:
+    """The verdicts (id, verdict, first violation's tick) of ``doc`` over ``rows`` (the
+    ``columns`` of each; ``(row, column)`` in ``unknown`` written ``unknown``), and the
+    output; ``whole``: the streamed CSV judge off."""
+    (tmp / "p.json").write_text(json.dumps(doc), encoding="utf-8")
+    (tmp / "t.csv").write_text("time," + ",".join(columns) + "\n" + "".join(
+        f"{k * 0.1:.1f}," + ",".join(_cell(r[c], (k, c) in unknown) for c in columns) + "\n"
+        for k, r in enumerate(rows)), encoding="utf-8")
+    saved = streamed.ENABLED
+    streamed.ENABLED = not whole
+    try:
+        got = CliRunner().invoke(main, ["audit", "-r", str(tmp / "p.json"), str(tmp / "t.csv"),
+                                        "--tick-period", "100ms", "--no-progress", "--json",
+                                        str(tmp / "a.json")])
+    finally:
+        streamed.ENABLED = saved
+    assert got.exit_code in (0, 1, 3), got.output
+    res = json.loads((tmp / "a.json").read_text(encoding="utf-8"))
+    return [(v["requirement"], v["verdict"], (v.get("first_violation") or {}).get("tick"))
+            for log in res["logs"] for v in log["verdicts"]], got.output
+
+
+_NUM = st.sampled_from([-3.0, 0.0, 1.0, 2.5, 4.0, 9.0])
+_ROW = st.fixed_dictionaries({"Psi": _NUM, "hdg": st.booleans(),
+                              "autopilot_engaged": st.booleans(), "roll_angle": _NUM,
+                              "roll_cmd": _NUM, "HDGmodeCmd": _NUM})
+
+
+def with_reference(rows: list[dict]) -> list[dict]:
+    return [dict(r, psiAtZero=p, rollAtZero=q) for r, (p, q) in zip(rows, reference(rows))]
+
+
+def test_one_row(tmp_path):
+    rows = [{"Psi": 2.0, "hdg": True, "autopilot_engaged": False, "roll_angle": 1.0,
+             "roll_cmd": 0.0, "HDGmodeCmd": 3.0}]
+    got, out = audit(tmp_path, export(True), rows, [n for n, _t in INPUTS])
+    assert got == audit(tmp_path, export(False), with_reference(rows),
+                        [n for n, _t in INPUTS] + ["psiAtZero", "rollAtZero"])[0]
+    assert "psiAtZero: FRET's definition of this Internal variable computed tick by tick" \
+        in out
+    assert [v for _i, v, _t in got] == ["violated", "vacuous", "satisfied", "satisfied"]
+
+
+@settings(max_examples=25, deadline=None)
+@given(st.lists(_ROW, min_size=1, max_size=9))
+def test_the_stream_is_computed_as_lustre_defines_it(tmp_path_factory, rows):
+    tmp = tmp_path_factory.mktemp("s")
+    names = [n for n, _t in INPUTS]
+    defined, _out = audit(tmp, export(True), rows, names)
+    assert defined == audit(tmp, export(True), rows, names, whole=True)[0]
+    written, _out = audit(tmp, export(False), with_reference(rows),
+                          names + ["psiAtZero", "rollAtZero"])
+    assert defined == written
+
+
+@settings(max_examples=25, deadline=None)
+@given(st.lists(_ROW, min_size=1, max_size=8), st.data())
+def test_unknown_inputs_never_decide_otherwise(tmp_path_factory, rows, data):
+    """An ``unknown`` cell of an input: the verdict is the one the true values give (the
+    reference, computed from them) or ``unknown``; streamed and whole judges agree."""
+    tmp = tmp_path_factory.mktemp("u")
+    names = [n for n, _t in INPUTS]
+    cells = [(k, c) for k in range(len(rows)) for c in names]
+    unknown = frozenset(data.draw(st.lists(st.sampled_from(cells), max_size=3)))
+    got, _out = audit(tmp, export(True), rows, names, unknown)
+    assert got == audit(tmp, export(True), rows, names, unknown, whole=True)[0]
+    truth, _out = audit(tmp, export(False), with_reference(rows),
+                        names + ["psiAtZero", "rollAtZero"])
+    for (rid, verdict, tick), (_r, want, want_tick) in zip(got, truth):
+        assert verdict in ("unknown", want), (rid, verdict, want)
+        if verdict == "violated":
+            assert tick == want_tick
+
+
+def test_a_nan_input_makes_it_unknown_from_there_on(tmp_path):
+    rows = [{"Psi": x, "hdg": h, "autopilot_engaged": False, "roll_angle": 0.0,
+             "roll_cmd": 0.0, "HDGmodeCmd": 0.0}
+            for x, h in ((0.0, False), (3.0, True), (math.nan, True), (9.0, False))]
+    got, _out = audit(tmp_path, export(True), rows, [n for n, _t in INPUTS])
+    assert dict((i, v) for i, v, _t in got)["P1"] == "unknown"
+
+
+def test_bound_by_a_column_of_its_own_it_is_still_computed(tmp_path):
+    """A CSV trace without bindings: its columns are the variables, and FRET's definition
+    of one is computed (as for a plain definition), whatever a column of its name says."""
+    rows = [{"Psi": 0.0, "hdg": True, "autopilot_engaged": False, "roll_angle": 0.0,
+             "roll_cmd": 0.0, "HDGmodeCmd": 0.0, "psiAtZero": 100.0, "rollAtZero": 0.0}]
+    got, _out = audit(tmp_path, export(True), rows,
+                      [n for n, _t in INPUTS] + ["psiAtZero", "rollAtZero"])
+    assert dict((i, v) for i, v, _t in got)["P1"] == "satisfied"
+
+
+@settings(max_examples=10, deadline=None)
+@given(st.lists(_ROW, min_size=1, max_size=6), st.data())
+def test_a_sampled_trace_audited_back_gives_the_same_verdicts(tmp_path_factory, rows, data):
+    """``--write-csv`` writes the variables read from the log (not the streams, computed
+    again when the trace is audited back), with the unknown cells: the same verdicts."""
+    tmp = tmp_path_factory.mktemp("w")
+    names = [n for n, _t in INPUTS]
+    # (unknown truth values: a numeric column all unknown would read as a boolean one)
+    cells = [(k, c) for k in range(len(rows)) for c in ("hdg", "autopilot_engaged")]
+    unknown = frozenset(data.draw(st.lists(st.sampled_from(cells), max_size=2)))
+    (tmp / "p.json").write_text(json.dumps(export(True)), encoding="utf-8")
+    (tmp / "t.csv").write_text("time," + ",".join(names) + "\n" + "".join(
+        f"{k * 0.1:.1f}," + ",".join(_cell(r[c], (k, c) in unknown) for c in names) + "\n"
+        for k, r in enumerate(rows)), encoding="utf-8")
+    binds = [x for n in names for x in ("--bind", f"{n}=/csv.{n}")]
+    verdicts = []
+    for trace, extra in ((tmp / "t.csv", [*binds, "--write-csv", str(tmp / "w")]),
+                         (tmp / "w" / "t.csv", [])):
+        got = CliRunner().invoke(main, ["audit", "-r", str(tmp / "p.json"), str(trace),
+                                        "--tick-period", "100ms", "--no-progress", "--json",
+                                        str(tmp / "a.json"), *extra])
+        assert got.exit_code in (0, 1, 3), got.output
+        res = json.loads((tmp / "a.json").read_text(encoding="utf-8"))
+        verdicts.append([(v["requirement"], v["verdict"], v.get("unknown_reason"),
+                          (v.get("first_violation") or {}).get("tick"))
+                         for log in res["logs"] for v in log["verdicts"]])
+    assert verdicts[0] == verdicts[1]
+    header = (tmp / "w" / "t.csv").read_text(encoding="utf-8").splitlines()
+    assert not any("psiAtZero" in line for line in header if line.startswith("time"))
