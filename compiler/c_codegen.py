@@ -95,6 +95,11 @@ class CMonitor:
     numeric: bool
     tick_doc: str
     note: str
+    #: with stream variables (FRET definitions through ``pre``, computed by the monitor):
+    #: the lines that fill ``reads`` (the variables the requirement reads, ``reads_fields``:
+    #: (C type, field)) from the inputs and the streams' state; else empty
+    stream_lines: tuple = ()
+    reads_fields: tuple = ()
 
     @property
     def upper(self) -> str:
@@ -136,9 +141,17 @@ def c_monitor(compiled: Compiled, prefix: str, automata: LTL3Automata | None = N
     fields = _layout(_fixed_fields(auts, quiet is not None) + code.fields)
     size = sum(x.size for x in fields)
     pad = (-size) % 8
+    inputs = _inputs(code, f)
+    system = getattr(compiled.entry, "streams", None)
+    streams: dict = {}
+    if system is not None:
+        inputs, streams, extra = _c_streams(system, code, inputs)
+        fields = _layout(fields + extra)
+        size = sum(x.size for x in fields)
+        pad = (-size) % 8
     return CMonitor(
         prefix=prefix, id=compiled.id, text=compiled.text,
-        strings=_strings(compiled, automata.note), inputs=_inputs(code, f),
+        strings=_strings(compiled, automata.note), inputs=inputs, **streams,
         fields=fields, pad=pad, state_bytes=size + pad, lines=reads + code.lines,
         commits=code.commits,
         nan_expr=" || ".join(dict.fromkeys(code.nan_checks)) or None,
@@ -230,6 +243,51 @@ def _inputs(code: CStep, f) -> list[CInput]:
                    + "; NaN in a comparison makes the tick unread")
         out.append(CInput(_comment(name), field, ctype, doc, c_string(name), name))
     return out
+
+
+def _c_streams(system, code: CStep, reads: list[CInput]
+               ) -> tuple[list[CInput], dict, list[CField]]:
+    """For a requirement reading the stream variables of ``system``
+    (:class:`fretc.fretish.fret_streams.StreamSystem`): its inputs (``reads`` without the
+    stream variables, then the variables they read, ``w0``, ``w1``, ... where not read
+    already), the :class:`CMonitor` fields ``stream_lines`` and ``reads_fields``, and the
+    state fields of the streams' ``pre`` (``q_s0``, ...). A NaN input of a stream makes its
+    tick unread, as a NaN comparison does (the audit: unknown from there on)."""
+    from fretc.compiler.stream_code import c_tick, stream_code
+
+    sc = stream_code(system, "c", "q_")
+    inputs = [x for x in reads if x.raw_name not in system.names]
+    field_of = {x.raw_name: (x.field, x.ctype) for x in inputs}
+    for k, (name, boolean) in enumerate(zip(system.inputs, system.input_booleans)):
+        if name not in field_of:
+            ctype = "bool" if boolean else "double"
+            field_of[name] = (f"w{k}", ctype)
+            doc = ("boolean: true or false" if boolean else "number (IEEE double): NaN makes "
+                   "the tick unread")
+            inputs.append(CInput(_comment(name), f"w{k}", ctype,
+                                 f"{doc}; read by {', '.join(system.names)} (FRET's "
+                                 "definitions, computed by the monitor)", c_string(name), name))
+    nan = [f"isnan(inputs->{field_of[n][0]})" for n in system.inputs
+           if field_of[n][1] == "double"]
+    lines = ([f"if ({' || '.join(nan)}) {{", "    s->unread_tick = (int64_t)s->tick; "
+              "/* unread: a stream's input is NaN */", "    return s->last;", "}"]
+             if nan else [])
+    lines += ["const bool q_first = s->tick == 0u;", "(void)q_first;"]
+    lines += [f"const {'bool' if b else 'double'} {slot} = s->{slot};"
+              for slot, _i, b in sc.slots]
+    lines += [f"const {field_of[n][1]} {x} = inputs->{field_of[n][0]};"
+              for n, x in zip(system.inputs, sc.inputs)]
+    lines += c_tick(sc, "", "s->")
+    out = dict(zip(system.names, sc.outputs))
+    lines += [f"reads.{fld} = {out[name] if name in out else 'inputs->' + fld};"
+              for name, (fld, _t) in code.inputs.items()]
+    for h in ("fretc_div", "fretc_mod", "fretc_pow"):
+        if any(h in line for line in lines):
+            code.helpers.add(h)
+    state = [CField("bool" if b else "double", slot, 0, init, "the previous value of a pre "
+                    "in a stream's definition") for slot, init, b in sc.slots]
+    return inputs, {"stream_lines": tuple(lines), "reads_fields": tuple(
+        (t, fld) for fld, t in code.inputs.values())}, state
 
 
 def _tick_doc(compiled) -> str:

@@ -100,6 +100,14 @@ class MonitorSource:
     probability: tuple | None = None  # (op, p) of the bound, with pctl
     #: the named durations' values used (``["T_stop = 1.5 seconds"]``), else empty
     constants: tuple = ()
+    #: the stream variables it reads (FRET's definitions through ``pre``: the entry's
+    #: ``streams``), computed by the monitor: the source of their factory
+    #: (:func:`fretc.compiler.stream_code.python_factory`), its arguments (the inputs'
+    #: names, then the stream variables'), and the monitor's inputs (``VARIABLES``: the
+    #: variables it reads with the stream variables' inputs in their place); else empty
+    stream_source: str = ""
+    stream_args: tuple = ()
+    inputs: tuple = ()
 
     # read-only delegations, same shape as compiler.build.Compiled's (kept: one property per field)
     @property
@@ -125,6 +133,14 @@ class MonitorSource:
                 "True", "False", "first"):
             return f"bool({self.verdict})"
         return self.verdict
+
+    @property
+    def stream_close(self) -> str:
+        """The end of the class's line in the module: the stream variables' factory and
+        the monitor's inputs after its own monitor class (``""`` without streams)."""
+        if not self.stream_source:
+            return ""
+        return f", _streams_{self.index}(*{self.stream_args!r}), {self.inputs!r})"
 
     @property
     def status_live(self) -> bool:
@@ -187,7 +203,22 @@ def monitor_source(compiled: Compiled, index: int) -> MonitorSource:
         uses_first=code.uses_first,
         constants=tuple(_constant_notes(compiled)),
         bad_sub=_letter_code(bad, atom_nodes, atom_locals),
-        good_sub=_letter_code(good, atom_nodes, atom_locals))
+        good_sub=_letter_code(good, atom_nodes, atom_locals),
+        **_streams(compiled, index, [v[0] for v in var_locals]))
+
+
+def _streams(compiled: Compiled, index: int, variables: list[str]) -> dict[str, Any]:
+    """The stream fields of :class:`MonitorSource` for a requirement whose entry has
+    ``streams`` (:class:`fretc.fretish.fret_streams.StreamSystem`), else none."""
+    system = getattr(compiled.entry, "streams", None)
+    if system is None:
+        return {}
+    from fretc.compiler.stream_code import python_factory
+
+    inputs = [v for v in variables if v not in system.names]
+    return {"stream_source": python_factory(system, f"_streams_{index}"),
+            "stream_args": system.inputs + system.names,
+            "inputs": tuple(inputs + [v for v in system.inputs if v not in inputs])}
 
 
 def _letter_code(aut, atom_nodes: list[Node], atom_locals: list[str]) -> str:

@@ -1,9 +1,10 @@
 """``fretc EXPORT --emit monitor`` (and ``c``, ``c2po``) of a FRET export whose requirement
 reads an Internal variable FRET's glossary defines: the monitor computes the variable from
 the variables its definition reads, as FRET's own monitors (Ogma's Copilot streams) do, so
-its inputs are those variables; each definition used is said once on stderr, and one fretc
-keeps free (a definition that reads itself through ``pre``) stays an input, with the reason.
-The monitor steps as the same requirement with the definition written out in FRETish."""
+its inputs are those variables; each definition used is said once on stderr. One that reads
+itself through ``pre`` (a stream with state) is computed by the monitor tick by tick
+(tests/compiler/test_monitor_streams.py); R2U2's C2PO keeps it free, with the reason. The
+monitor steps as the same requirement with the definition written out in FRETish."""
 
 from __future__ import annotations
 
@@ -44,9 +45,14 @@ def test_the_monitor_reads_the_variables_the_definition_reads(tmp_path):
     assert mod["MONITORS"]["R1"]().VARIABLES == ["a", "o"]
     assert "note: rise: FRET defines it (Internal) as a and not pre a; that definition in " \
            "the monitor" in err
-    # one that reads itself stays an input, and the note says why
+    # one that reads itself (a stream with state) is computed by the monitor too, tick by
+    # tick: its inputs are the variables it reads, and the note says so
     mod, err = _monitors(tmp_path, "whenever seen ctrl shall immediately satisfy o")
-    assert sorted(mod["MONITORS"]["R1"]().VARIABLES) == ["o", "seen"]
+    assert sorted(mod["MONITORS"]["R1"]().VARIABLES) == ["a", "o"]
+    assert "seen: FRET defines it (Internal) as a -> (a or pre seen); that definition is a " \
+           "stream with state (it reads itself through pre): computed tick by tick" in err
+    # R2U2's C2PO keeps it free, and says why
+    _got, err = _monitors(tmp_path, "whenever seen ctrl shall immediately satisfy o", "c2po")
     assert "seen: FRET defines it (Internal) as a -> (a or pre seen); fretc reads it as a " \
            "free variable: its definition reads itself" in err
 

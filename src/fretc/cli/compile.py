@@ -47,13 +47,17 @@ def _entries(paths, tick_period: str | None = None) -> list:
     return entries_with_period(entries, tick_period)
 
 
-def _load(paths, tick_period: str | None = None, definitions: bool = False) -> list:
+def _load(paths, tick_period: str | None = None, definitions: bool = False,
+          streams: bool = False) -> list:
     """The compiled requirements of ``paths`` (:func:`_entries`, then the compiler). With
     ``definitions`` (the runtime monitors: ``--emit monitor``, ``c``, ``c2po``), the
     Internal variables and modes a FRET export defines are their definitions, as FRET's
     own monitors (Ogma's Copilot streams) compute them from the variables they read: each
     said once on stderr, with those kept as inputs and why
-    (:func:`fretc.fretish.fret_variables.fret_declarations`)."""
+    (:func:`fretc.fretish.fret_variables.fret_declarations`); with ``streams`` too
+    (``monitor``, ``c``), a definition that reads itself through ``pre`` is computed by
+    the monitor tick by tick (:mod:`fretc.fretish.fret_streams`), its inputs the variables
+    it reads."""
     # lazy: the compiler (Lark tables, Spot) only when a command compiles
     from fretc.compiler.build import compile_entries
 
@@ -61,7 +65,7 @@ def _load(paths, tick_period: str | None = None, definitions: bool = False) -> l
     if definitions:
         from fretc.fretish.fret_variables import fret_declarations
 
-        entries, notes = fret_declarations(entries, use=_MONITOR_USE)
+        entries, notes = fret_declarations(entries, use=_MONITOR_USE, streams=streams)
         for n in notes:
             click.echo(_shown(f"note: {n}"), err=True)
     return compile_entries(entries)
@@ -102,7 +106,8 @@ def compile_cmd(files: tuple[str, ...], emit: str, as_json: bool, output: str | 
                 click.echo(_shown(str(c.error)), err=True)
             _write_json_list(sys.stdout, texts)
             sys.exit(1 if failed else 0)
-    compiled = _load(files, tick_period, definitions=emit in ("monitor", "c", "c2po"))
+    compiled = _load(files, tick_period, definitions=emit in ("monitor", "c", "c2po"),
+                     streams=emit in ("monitor", "c"))
     if not compiled:
         _no_requirements(files)
     failed = [c for c in compiled if c.error is not None]
