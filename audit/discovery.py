@@ -53,7 +53,7 @@ def find_logs(paths: Sequence[str]) -> list[str]:
         path = Path(p)
         if not path.exists():
             raise AuditInputError(f"{p}: no such file or folder")
-        refused = unseekable(path)  # (a FIFO, /dev/stdin, <(...): issue 91)
+        refused = unseekable(path)  # (a FIFO, /dev/stdin, <(...))
         if refused is not None:
             raise AuditInputError(f"{p}: {refused}")
         if path.is_file() or (path / "metadata.yaml").is_file():

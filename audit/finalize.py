@@ -42,7 +42,7 @@ if TYPE_CHECKING:
     from fretc.audit.verdict import LogAudit, Verdict
 
 __all__ = ["finalize", "between_ticks", "prepare", "unknown_of", "NAN_FALSE_NOTE",
-           "vacuous_note", "judged", "shown_ticks", "StreamTicks"]
+           "vacuous_note", "judged", "decided", "shown_ticks", "StreamTicks"]
 
 #: The note of every verdict judged under a binding file's ``[tick] nan = "false"``.
 NAN_FALSE_NOTE = ("NaN policy of the binding file ([tick] nan = \"false\"): a comparison "
@@ -167,7 +167,7 @@ def _verdict(plan: AuditPlan, r: RequirementPlan, res: ClockPass, bindings: Bind
             if holds is None:
                 return
         _robustness(r, res, bindings, v, j.robustness, holds)
-    _decided(plan, r, v, holds, ev, status, st_tick, n, lambda: _own_ticks(r, res, bindings))
+    decided(plan, r, v, holds, ev, status, st_tick, n, lambda: _own_ticks(r, res, bindings))
     if v.verdict == "violated":
         _values_around(plan.config.window, r, res, bindings, v)
 
@@ -188,10 +188,10 @@ def judged(plan: AuditPlan, r: RequirementPlan, v: Verdict, ticks: StreamTicks,
     value, at, at_time, points = rob
     held = at_time if at_time >= 0 else None
     _robustness_fields(v, ev.holds, value, TimePoint(at, at_time, held), points)
-    _decided(plan, r, v, ev.holds, ev, status, tick, ticks.n, lambda: ticks)
+    decided(plan, r, v, ev.holds, ev, status, tick, ticks.n, lambda: ticks)
 
 
-def _decided(plan: AuditPlan, r: RequirementPlan, v, holds: bool, ev, status: str,
+def decided(plan: AuditPlan, r: RequirementPlan, v, holds: bool, ev, status: str,
              st_tick: int | None, n: int, ticks: Callable[[], _Ticks | StreamTicks]) -> None:
     """The verdict word of a decided requirement (``holds``), its vacuity's note, and a
     violation's evidence (:func:`_first_violation`, over the ticks ``ticks()`` gives)."""

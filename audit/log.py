@@ -43,6 +43,7 @@ from fretc.audit.passes import LogPasses, clock_key, restrict, run_passes
 from fretc.audit.plan import select_variant
 from fretc.audit.streamed import CsvStreams, StreamedResult
 from fretc.audit.streamed_verdict import finalize_streamed, streamed_values
+from fretc.audit.streamed_three import ThreeResult, finalize_three, judged_three
 from fretc.signals.csv_columns import csv_streamed_pass
 
 if TYPE_CHECKING:
@@ -296,6 +297,8 @@ class _LogRun:
         assert isinstance(source, CsvSource)  # (a .csv file)
         streams.close(source)
         self.streams = streams
+        if streams.whole:
+            judged_three(plan, streams, source)
         if streams.whole:  # (read again: the columns of those judged whole kept too)
             again = whole | {v for r in active if r.index in streams.whole
                              for v in r.variables}
@@ -478,7 +481,10 @@ class _LogRun:
         violated = []
         for r in ok:
             if r.index in streamed:
-                if finalize_streamed(self.plan, r, streamed[r.index], verdicts[r.index]):
+                got = streamed[r.index]
+                if (finalize_three(self.plan, r, got, verdicts[r.index], la)
+                        if isinstance(got, ThreeResult) else
+                        finalize_streamed(self.plan, r, got, verdicts[r.index])):
                     violated.append(r)
             else:
                 finalize(self.plan, r, by_index[r.index], self.bindings, verdicts[r.index],
@@ -491,13 +497,13 @@ class _LogRun:
             operand_values(self.path, self.plan, self.bindings, ok, verdicts, by_index,
                            self.source)
 
-    def _streamed_figures(self) -> dict[int, StreamedResult]:
+    def _streamed_figures(self) -> dict[int, StreamedResult | ThreeResult]:
         """The requirements judged as the CSV trace was read, by index, with their clock
         figures set (as :meth:`_clock_figures` sets them from a pass: the trace's rows)."""
         st, s = self.streams, self.stream_sampling
         if st is None or s is None:
             return {}
-        out = {}
+        out: dict[int, StreamedResult | ThreeResult] = {}
         for r in self.plan.requirements:
             got = st.results.get(r.index)
             v = self.verdicts[r.index]

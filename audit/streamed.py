@@ -27,13 +27,16 @@ A requirement is judged whole instead - its columns kept, as for every other log
 stream cannot take it (:func:`unstreamed_reason`: a FRET temporal function, which reads
 other ticks through the scope's ``Left``/``Right``; a probability bound, whose triggers are
 trials; ``--coverage``; an automaton too large for tables) or where the trace leaves some of
-its ticks unknown, which the three-valued judge decides over the whole trace: a comparison
-reading NaN, an ``unknown`` cell in a column it reads, a ``gap`` or ``cut`` row. Those are
-known only once read, so the file is then read a second time, keeping those requirements'
-columns (:class:`fretc.audit.log` does both). Every read of one audit (the second one, and
-the values read again around a violation) stops at the bytes the first one read
+its ticks unknown, which the three-valued judge decides: an ``unknown`` cell in a column it
+reads, a ``gap`` or ``cut`` row. Those are known only once read, so the file is then read a
+second time, keeping those requirements' columns (:class:`fretc.audit.log` does both). A
+requirement whose comparisons read NaN (:data:`NAN_REASON`) or that reads ``unknown`` cells
+(:data:`UNKNOWN_CELLS`) is instead judged in three-valued semantics as the file is read
+again (:mod:`fretc.audit.streamed_three`, in memory that does not grow with the trace
+either), and only where those streams cannot take it are its columns kept. Every read of one audit (the second one, and the values
+read again around a violation) stops at the bytes the first one read
 (:attr:`fretc.logs.CsvSource.extent`, the file's size when first opened): a file still being
-written is judged over the same rows for every requirement (issue 91, W1). Memory: a chunk of rows, the streams' state
+written is judged over the same rows for every requirement. Memory: a chunk of rows, the streams' state
 (a bounded window's last ticks, at most :data:`fretc.monitors.interval.MAX_LISTED` pending
 triggers listed per group, :data:`fretc.audit.verdict.MARGIN_POINTS` margin points) per
 requirement.
@@ -61,7 +64,14 @@ from fretc.audit.verdict import MARGIN_POINTS
 if TYPE_CHECKING:
     from fretc.audit.model import AuditPlan, RequirementPlan
 
-__all__ = ["ENABLED", "StreamedResult", "CsvStreams", "unstreamed_reason", "values_around"]
+#: why a requirement's streams give up at a NaN (the three-valued streams then take it,
+#: :mod:`fretc.audit.streamed_three`)
+NAN_REASON = "a comparison reads NaN"
+#: the start of why a requirement reading ``unknown`` cells is given up (the columns follow)
+UNKNOWN_CELLS = "unknown cells in "
+
+__all__ = ["ENABLED", "NAN_REASON", "UNKNOWN_CELLS", "StreamedResult", "CsvStreams",
+           "unstreamed_reason", "values_around"]
 
 #: Whether CSV traces are judged while read (tests set it False to compare the two judges).
 ENABLED = True
@@ -154,6 +164,9 @@ class CsvStreams:
     first_time: int | None = None
     last_time: int | None = None
     #: requirement index -> what its streams decided (after :meth:`close`)
+    #: (after :meth:`close`; a requirement whose comparisons read NaN, or that reads
+    #: ``unknown`` cells, may then get a :class:`fretc.audit.streamed_three.ThreeResult`:
+    #: :func:`~fretc.audit.streamed_three.judged_three`)
     results: dict[int, StreamedResult] = field(default_factory=dict)
     #: requirement index -> why it is judged whole after all (after :meth:`close`)
     whole: dict[int, str] = field(default_factory=dict)
@@ -202,7 +215,7 @@ class CsvStreams:
         for s in self.streams:
             i = s.r.index
             unknown = [c for c in s.names if source.unknown_rows.get(c)]
-            why = s.gave_up or marks or (f"unknown cells in {', '.join(unknown)}"
+            why = s.gave_up or marks or (f"{UNKNOWN_CELLS}{', '.join(unknown)}"
                                          if unknown else None)
             if why is None and self.n == 0:
                 why = "no row"
@@ -228,7 +241,7 @@ def _feed(s: _Streams, columns: Mapping[str, np.ndarray], k: int, times: np.ndar
         s.gave_up = f"no column {exc.args[0]!r}"
         return
     if nan_ticks_of(s.exprs, cols, k).any():
-        s.gave_up = "a comparison reads NaN"
+        s.gave_up = NAN_REASON
         s.interval = s.rob = s.ltl3 = None  # type: ignore[assignment]  # (their memory freed)
         return
     s.interval.feed(cols, k, times)

@@ -13,6 +13,7 @@ from fretc.audit.finalize import judged, shown_ticks, StreamTicks
 from fretc.audit.streamed import StreamedResult, values_around
 
 if TYPE_CHECKING:
+    from fretc.audit.streamed_three import ThreeResult
     from fretc.audit.model import AuditPlan, RequirementPlan
     from fretc.audit.verdict import Verdict
 
@@ -36,7 +37,7 @@ def finalize_streamed(plan: AuditPlan, r: RequirementPlan, got: StreamedResult,
 
 def streamed_values(plan: AuditPlan, source: CsvSource, violated: list[RequirementPlan],
                     verdicts: Mapping[int, Verdict],
-                    streamed: Mapping[int, StreamedResult]) -> None:
+                    streamed: Mapping[int, StreamedResult | ThreeResult]) -> None:
     """The values and message log times of the violated requirements ``violated`` at the
     ticks :func:`fretc.audit.finalize.shown_ticks` shows around their first violation
     (``v.values``, ``v.sources``), read again from the trace in one pass up to the last
@@ -53,8 +54,11 @@ def streamed_values(plan: AuditPlan, source: CsvSource, violated: list[Requireme
                                   source.extent)
     for r in violated:
         v, ticks = verdicts[r.index], shown[r.index]
+        cells = getattr(streamed[r.index], "cells", {})  # (a ThreeResult's unknown cells)
         for name in r.variables:
-            v.values[name] = [(i, times[i], values[name][i]) for i in ticks]
+            unknown = set(cells[name].tolist()) if name in cells else set()
+            v.values[name] = [(i, times[i], None if i in unknown else values[name][i])
+                              for i in ticks]
         # (a row's message is the row: its log time the tick's, None when negative)
         v.sources[CSV_TOPIC] = [(i, times[i], times[i] if times[i] >= 0 else None)
                                 for i in ticks]

@@ -40,7 +40,8 @@ if TYPE_CHECKING:
     from fretc.audit.verdict import Verdict
     from fretc.audit.model import RequirementPlan
 
-__all__ = ["judge_three"]
+__all__ = ["judge_three", "pt_decides_note", "unknown_reason", "outgrew_words",
+           "COMPLETED_NOTE"]
 
 
 def judge_three(r: RequirementPlan, res: ClockPass, v: Verdict, j: Judgement, nan_unknown: bool,
@@ -60,7 +61,7 @@ def judge_three(r: RequirementPlan, res: ClockPass, v: Verdict, j: Judgement, na
     # Kleene's reading, and where it is open every completion's
     holds, (lo, hi), why = decide(r.formalization.pt, ev3)
     completed = holds is not None and not lo[-1] and bool(hi[-1])
-    outgrew = f" (not every way of filling them was followed: {why})" if why else ""
+    outgrew = outgrew_words(why)
     status, st_tick = "unknown", None
     if not r.offline and r.monitor_source is not None:
         try:
@@ -94,15 +95,30 @@ def judge_three(r: RequirementPlan, res: ClockPass, v: Verdict, j: Judgement, na
     return holds, ev, status, st_tick
 
 
-_COMPLETED = ("violated whatever the unknown ticks held: its pt formula is false at the last "
-              "tick in every way of filling them (each followed through the formula's "
-              "states; no single failed trigger lies wholly in ticks read)")
+def outgrew_words(why: str) -> str:
+    """The words an unknown reason adds when the completions were not all followed
+    (``why``: :class:`fretc.monitors.completions.TooManyStates`' message; empty: none)."""
+    return f" (not every way of filling them was followed: {why})" if why else ""
+
+
+#: the note of a violation every completion makes, no single failed trigger shown
+COMPLETED_NOTE = ("violated whatever the unknown ticks held: its pt formula is false at the "
+                  "last tick in every way of filling them (each followed through the "
+                  "formula's states; no single failed trigger lies wholly in ticks read)")
+_COMPLETED = COMPLETED_NOTE
 
 
 def _pt_decides(hi: np.ndarray) -> str:
-    """Why a requirement is violated without a definite failed trigger to show."""
+    """Why a requirement is violated without a definite failed trigger to show (``hi``:
+    where its pt formula may be true, over every tick)."""
     still = np.flatnonzero(hi)
-    d = int(still[-1]) + 1 if len(still) else 0
+    return pt_decides_note(int(still[-1]) if len(still) else None)
+
+
+def pt_decides_note(last_hi: int | None) -> str:
+    """Why a requirement is violated without a definite failed trigger to show, its pt
+    formula false in every completion after tick ``last_hi`` (None: at every tick)."""
+    d = last_hi + 1 if last_hi is not None else 0
     return (f"violated whatever the unknown ticks held: its pt formula is false from tick "
             f"{d} on in every way of filling them (no single failed trigger lies wholly in "
             "ticks read)")
@@ -137,9 +153,17 @@ def _why(res: ClockPass, unknown: np.ndarray, n: int, outgrew: str = "",
     what = ", ".join(causes)
     if res.lost_words:
         what += f": {res.lost_words}"
+    return unknown_reason(k, n, what, first, int(res.times[first]), outgrew)
+
+
+def unknown_reason(k: int, n: int, what: str, first: int, first_time: int,
+                   outgrew: str = "") -> str:
+    """The reason of a verdict left unknown by ``k`` of its ``n`` ticks (``what`` makes
+    them unknown; the first at tick ``first``, ``first_time`` ns; ``outgrew``: why not
+    every way of filling them was followed, with its leading space, or empty)."""
     depends = "may depend" if outgrew else "depends"
     return (f"{k} of its {n} ticks are unknown ({what}; the first at tick {first}, "
-            f"{int(res.times[first])} ns), and the verdict {depends} on them{outgrew}: no "
+            f"{first_time} ns), and the verdict {depends} on them{outgrew}: no "
             "violation in the ticks read, but one could lie in the ticks not read")
 
 

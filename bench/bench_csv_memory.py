@@ -3,6 +3,7 @@
     python bench/bench_csv_memory.py                       # 10^6 rows, 2 and 10 requirements
     python bench/bench_csv_memory.py --rows 1000000 10000000 --requirements 2
     python bench/bench_csv_memory.py --rows 1000000 --trace   # where the bytes go (tracemalloc)
+    python bench/bench_csv_memory.py --nan first last --no-runner  # one NaN linear_speed
 
 1. Writes a plain CSV trace (``time`` in seconds every 100 ms, then the Safe-ROS variables;
    obstacles come and go, the robot stops within 0.5 s, speeds under their limits: every
@@ -15,6 +16,9 @@
    tick kept and judged at once, as every audit did before), and the runner of ``fretc
    REQ.fret --emit c`` (``cc -O2``) over the same file, checks that the three give the same
    verdicts and the two audits the same JSON, and prints them and the ratios.
+   ``--nan first``/``last``: the same trace with ``linear_speed`` NaN in its first or last
+   row (R4 and the others reading it have an unknown tick: judged in three-valued
+   semantics, :mod:`fretc.audit.streamed_three`, against the whole-trace three-valued judge).
 3. ``--trace``: the audit in this process under :mod:`tracemalloc`: the peak of Python
    allocations and the 15 largest allocation sites at the peak (numpy arrays included).
 """
@@ -81,6 +85,33 @@ def write_trace(path: Path, rows: int) -> None:
                                                  turn.tolist(), clear.tolist())]
             f.write("\n".join(lines) + "\n")
     tmp.rename(path)
+
+
+def with_nan(trace: Path, where: str) -> Path:
+    """A copy of ``trace`` (beside it, reused) with ``linear_speed`` NaN in its first or
+    last row (``where``)."""
+    out = trace.with_name(f"{trace.stem}_nan_{where}.csv")
+    if out.exists():
+        return out
+    col = COLUMNS.index("linear_speed")
+
+    def nan(line: str) -> str:
+        cells = line.rstrip("\n").split(",")
+        cells[col] = "nan"
+        return ",".join(cells) + "\n"
+
+    with open(trace, encoding="ascii") as f, open(out, "w", encoding="ascii") as g:
+        g.write(f.readline())
+        row = f.readline()
+        if where == "first":
+            g.write(nan(row))
+            shutil.copyfileobj(f, g)
+        else:
+            for nxt in f:
+                g.write(row)
+                row = nxt
+            g.write(nan(row))
+    return out
 
 
 def measured(cmd: list[str], env: dict | None = None) -> tuple[int, float, str, int]:
@@ -184,16 +215,20 @@ def main() -> None:
     ap.add_argument("--trace", action="store_true", help="tracemalloc instead of the runs")
     ap.add_argument("--no-runner", action="store_true", help="skip the C runner")
     ap.add_argument("--no-whole", action="store_true", help="skip the whole-trace judge")
+    ap.add_argument("--nan", nargs="+", choices=["none", "first", "last"], default=["none"],
+                    help="a NaN linear_speed in the trace's first or last row")
     args = ap.parse_args()
     work = Path(args.workdir)
     work.mkdir(parents=True, exist_ok=True)
-    print("| rows | requirements | fretc audit peak RSS | CPU | whole-trace judge peak RSS "
+    print("| rows | NaN | requirements | fretc audit peak RSS | CPU | whole-trace judge peak RSS "
           "| CPU | C runner peak RSS | CPU | peak: audit / whole | audit / C |")
-    print("|---|---|---|---|---|---|---|---|---|---|")
-    for rows in args.rows:
+    print("|---|---|---|---|---|---|---|---|---|---|---|")
+    for rows, nan in [(r, x) for r in args.rows for x in args.nan]:
         trace = work / f"trace_{rows}.csv"
         if not trace.exists():
             write_trace(trace, rows)
+        if nan != "none":
+            trace = with_nan(trace, nan)
         for n in args.requirements:
             fret = work / f"req{n}.fret"
             fret.write_text(REQUIREMENTS[n])
@@ -223,7 +258,7 @@ def main() -> None:
             def sec(s):
                 return f"{s:.2f} s" if s is not None else "-"
 
-            print(f"| {rows:,} | {n} | {mb(rss)} | {sec(cpu)} | {mb(w_rss)} | {sec(w_cpu)} | "
+            print(f"| {rows:,} | {nan} | {n} | {mb(rss)} | {sec(cpu)} | {mb(w_rss)} | {sec(w_cpu)} | "
                   f"{mb(c_rss)} | {sec(c_cpu)} | "
                   f"{f'{rss / w_rss:.2f}x' if w_rss else '-'} | "
                   f"{f'{rss / c_rss:.2f}x' if c_rss else '-'} |", flush=True)

@@ -53,7 +53,7 @@ from __future__ import annotations
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from fractions import Fraction
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -66,7 +66,7 @@ if TYPE_CHECKING:
     from fretc.monitors.unknowns import Unknowns
 
 __all__ = ["EvidenceUnsupported", "Violation", "Evidence", "evaluate_requirement", "verdict_of",
-           "duration_of",
+           "duration_of", "favoured",
            "endpoints", "scope_mode",
            "scope_intervals", "scope_of", "trace_signals", "trigger_points", "OBLIGATIONS"]
 
@@ -323,7 +323,7 @@ def evaluate_requirement(req: A.Requirement, columns: Mapping[str, np.ndarray], 
     intervals = scope_intervals(scope, mode, n)
     R, C, S = _signals(req, columns, n, mode)
     if favour is not None:
-        R, C, S = _favoured(req, R, C, S, favour)
+        R, C, S = favoured(req, R, C, S, favour)
     k = duration_of(req, duration_ticks)
     checker = ObligationChecker(timing, scope.startswith("only"), R, S, k)
     triggers = violations = 0
@@ -370,7 +370,9 @@ def duration_of(req: A.Requirement, duration_ticks: int | None) -> int | None:
     return int(amount)
 
 
-def _favoured(req: A.Requirement, R, C, S, favour):
+def favoured(req: A.Requirement, R: np.ndarray, C: np.ndarray | None,
+             S: np.ndarray | None, favour: Any
+             ) -> tuple[np.ndarray, np.ndarray | None, np.ndarray | None]:
     """``R, C, S`` with their unknown ticks (``favour``) set to meet the obligation: no
     trigger; the response the timing wants (true, false for ``never``, negated in ``only*``
     scopes); the stop condition that ends an ``until`` and does not end a ``before``."""

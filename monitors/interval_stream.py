@@ -51,14 +51,15 @@ first :data:`MAX_LISTED`; never a Python loop over ticks or triggers.
 
 from __future__ import annotations
 
-from collections.abc import Iterator, Mapping
+from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
 from fretc.fretish import ast as A
 from fretc.monitors.expressions import ColumnExpressions, EvidenceUnsupported
-from fretc.monitors.interval import MAX_LISTED, Evidence, Violation, duration_of
+from fretc.monitors.interval import MAX_LISTED, Evidence, Violation, duration_of, favoured
 
 __all__ = ["IntervalStream", "stream_unsupported", "NOT_POINTWISE"]
 
@@ -693,8 +694,14 @@ class IntervalStream:
         self._last_time = 0
         self._last_R = False
         self._result: tuple[Evidence, dict[int, int]] | None = None
+        #: called with each chunk's trigger points (the trace's tick of the chunk's first,
+        #: the local trigger ticks, the local interval starts, the start of the interval
+        #: open before the chunk or None, the chunk's times): the definite triggers of
+        #: :class:`fretc.monitors.definite_stream.DefiniteStream`
+        self.on_triggers: Callable[..., None] | None = None
 
-    def feed(self, columns: Mapping[str, np.ndarray], k: int, times: np.ndarray) -> None:
+    def feed(self, columns: Mapping[str, np.ndarray], k: int, times: np.ndarray,
+             favour: Any = None) -> None:
         """Take the next ``k`` ticks (the trace's ticks ``n .. n+k-1``).
 
         Args:
@@ -703,6 +710,11 @@ class IntervalStream:
                 which may change from chunk to chunk.
             k: ticks in the chunk (0 is allowed).
             times: ``int64`` array of at least ``k`` tick times (ns).
+            favour: where the chunk's condition, response and stop condition are unknown
+                (bool arrays ``C``, ``R``, ``S`` of at least ``k``:
+                :class:`fretc.monitors.unknowns.Unknowns` over the chunk): there they meet
+                the obligation, as :func:`~fretc.monitors.interval.evaluate_requirement`'s
+                ``favour`` sets them; None: the columns as they are.
 
         Raises:
             KeyError: a variable without a column.
@@ -723,6 +735,8 @@ class IntervalStream:
         R = ex.bool(self._response)[:k]
         C = ex.bool(self._cond)[:k] if self._cond is not None else None
         S = ex.bool(self._stop)[:k] if self._stop is not None else None
+        if favour is not None:
+            R, C, S = favoured(self._req, R, C, S, favour)
         self._step(self._scope.chunk(M, k), R, C, S, times, final=False)
         self.n += k
 
@@ -755,6 +769,10 @@ class IntervalStream:
             opened = I[edges]
             starts, closes = edges[opened], edges[~opened] - 1
         T = self._triggers(I, C, starts) if not final else starts
+        if self.on_triggers is not None and not final:
+            open_interval = self._ledger.open if self._in else None
+            self.on_triggers(self.n, T, starts,
+                             open_interval[0] if open_interval is not None else None, times)
         ch = _Chunk(self.n, L, R, S, T, closes, self._in, times, self._last_time,
                     self._last_R, final)
         ledger = self._ledger

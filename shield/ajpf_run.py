@@ -136,7 +136,7 @@ def find_tools(mcapl: str | None, java: str | None, javac: str | None,
 def _program(tool: str | None) -> str | None:
     """``tool`` as a command that runs from any folder: a path (it names a folder: ``bin/java``,
     ``./java``) made absolute against the current folder (JPF runs in the agent's folder, so a
-    relative one would name another file there, or none: issue 91), a bare name as the ``PATH``
+    relative one would name another file there, or none), a bare name as the ``PATH``
     finds it (itself when it does not)."""
     if not tool:
         return tool

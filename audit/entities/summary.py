@@ -40,7 +40,7 @@ def summary_verdict(r: Any, path: str, out: list[Verdict], summary: str) -> Verd
     for one trace): violated, a negative margin; satisfied or vacuous, one >= 0; unknown or
     error, none. A violated entity without a margin of its own (a violation at distance 0,
     a sign that disagreed) and satisfied ones with positive margins give no margin, never a
-    positive one on a violated verdict (issue 91, E2)."""
+    positive one on a violated verdict)."""
     kinds: set[str] = set()
     first: Verdict | None = None  # (the earliest violation, the first in order among equals)
     margin: float | None = None

@@ -29,6 +29,7 @@ from hypothesis import strategies as st
 import _metamorphic as M
 from test_metamorphic import ALL, SAMPLE, _case
 
+import fretc.audit.log as audit_log_module
 import fretc.audit.streamed as streamed
 import fretc.logs.csv.read as csv_read
 import fretc.monitors.robustness as robustness
@@ -78,7 +79,8 @@ def plan(tmp_path_factory):
 
 def _trace(rnd: random.Random, n: int, timed: bool, marks: str) -> str:
     """A CSV trace of ``n`` rows of ``x, p, q, m`` (``marks``: "" for a clean trace, or
-    what makes some ticks unknown: ``nan``, ``unknown`` cells, ``gap`` rows, a ``cut`` row)."""
+    what makes some ticks unknown: ``nan``, ``unknown`` cells, ``both``, ``gap`` rows, a
+    ``cut`` row)."""
     lines = ["time,x,p,q,m" if timed else "x,p,q,m"]
     t = 0.0
     sticky = [rnd.choice("01") for _ in range(3)]
@@ -91,9 +93,9 @@ def _trace(rnd: random.Random, n: int, timed: bool, marks: str) -> str:
                 if rnd.random() < 0.3:
                     sticky[j] = rnd.choice("01")
             cells = [rnd.choice(XS)] + sticky
-            if marks == "nan" and rnd.random() < 0.05:
+            if marks in ("nan", "both") and rnd.random() < 0.05:
                 cells[0] = "nan"
-            if marks == "unknown" and rnd.random() < 0.05:
+            if marks in ("unknown", "both") and rnd.random() < 0.05:
                 cells[rnd.randrange(4)] = "unknown"
         lines.append(",".join(([f"{t:.1f}"] if timed else []) + cells))
     if marks == "cut":
@@ -111,16 +113,24 @@ def _both(plan, path: str, patches: dict | None = None) -> tuple[str, str, dict]
     constants in both), and what the streams decided in the streamed one."""
     decided: dict = {}
     original = streamed.CsvStreams.close
+    then = audit_log_module.judged_three
 
     def spy(self, source):
         original(self, source)
-        decided.update(results=set(self.results), whole=dict(self.whole))
+        decided.update(results=set(self.results), whole=dict(self.whole), three=set())
+
+    def spy_three(plan, streams, source):
+        before = set(streams.results)
+        then(plan, streams, source)
+        decided.update(results=set(streams.results), whole=dict(streams.whole),
+                       three=set(streams.results) - before)
 
     mp = pytest.MonkeyPatch()
     try:
         for (module, name), value in (patches or {}).items():
             mp.setattr(module, name, value)
         mp.setattr(streamed.CsvStreams, "close", spy)
+        mp.setattr(audit_log_module, "judged_three", spy_three)
         got = _json(plan, path)
         mp.setattr(streamed, "ENABLED", False)
         whole = _json(plan, path)
@@ -134,7 +144,7 @@ def _ids(plan, indexes) -> set[str]:
 
 
 _TRACES = (st.integers(1, 60), st.booleans(),
-           st.sampled_from(["", "", "", "nan", "unknown", "gap", "cut"]),
+           st.sampled_from(["", "", "", "nan", "unknown", "both", "gap", "cut"]),
            st.integers(1, 7), st.integers(1, 9), st.randoms(use_true_random=False))
 
 
@@ -168,18 +178,23 @@ def check_trace(tmp_path_factory, n: int, timed: bool, marks: str, rows: int, ch
     assert got == whole
     streamed_ids = _ids(plan, decided["results"])
     assert not streamed_ids & WHOLE
-    if not marks and chunk >= 3:  # a clean trace: every requirement but WHOLE streamed
-        # (a robustness chunk shorter than a bounded window, R14's 3 ticks, is refused)
+    if marks in ("", "nan", "unknown", "both") and chunk >= 3:
+        # a clean trace, or one whose NaN and unknown cells the three-valued streams take:
+        # every requirement but WHOLE streamed (a robustness chunk shorter than a bounded
+        # window, R14's 3 ticks, is refused)
         assert streamed_ids == {r.id for r in plan.requirements} - WHOLE, decided["whole"]
 
 
 @pytest.mark.tor("TOR-LOG-003")
 def test_what_sends_a_requirement_back_to_the_whole_trace_judge(plan, tmp_path):
-    """A NaN read by a comparison sends back the requirements comparing ``x`` only; an
-    ``unknown`` cell those reading its column; a ``gap`` or ``cut`` row every one. The
-    JSON is the whole-trace judge's in each case."""
+    """A NaN read by a comparison sends the requirements comparing ``x`` (only them) to the
+    three-valued streams (audit/streamed_three.py), which decide them here, and an
+    ``unknown`` cell those reading its column; a ``gap`` or ``cut`` row sends every one
+    back to the whole-trace judge. The JSON is the whole-trace judge's in each case."""
     rows = ["time,x,p,q,m"] + [f"{i / 10:.1f},1.5,{i % 3 == 0:d},{i % 4 == 0:d},{i % 7 < 3:d}"
                                for i in range(30)]
+
+    three: dict[str, set[str]] = {}
 
     def run(name: str, edit) -> tuple[set[str], set[str]]:
         lines = list(rows)
@@ -188,6 +203,7 @@ def test_what_sends_a_requirement_back_to_the_whole_trace_judge(plan, tmp_path):
         path.write_text("\n".join(lines) + "\n", encoding="utf-8")
         got, whole, decided = _both(plan, str(path))
         assert got == whole, name
+        three[name] = _ids(plan, decided["three"])
         return _ids(plan, decided["results"]), _ids(plan, decided["whole"])
 
     def nan(lines):
@@ -200,15 +216,18 @@ def test_what_sends_a_requirement_back_to_the_whole_trace_judge(plan, tmp_path):
 
     reading_x = {"R1", "R3", "R4", "R6", "R7", "R10", "R12", "R13", "R17"}
     ok, back = run("nan", nan)
-    assert back == reading_x and ok == set(_ids(plan, range(99))) - WHOLE - reading_x
+    assert not back and ok == set(_ids(plan, range(99))) - WHOLE
+    assert three["nan"] == reading_x
     ok, back = run("unknown", unknown_q)
     reading_q = {"R2", "R3", "R4", "R5", "R7", "R8", "R9", "R11", "R12", "R13", "R14",
                  "R15", "R16"}
-    assert back == reading_q and ok == set(_ids(plan, range(99))) - WHOLE - reading_q
+    assert not back and ok == set(_ids(plan, range(99))) - WHOLE
+    assert three["unknown"] == reading_q
     ok, back = run("gap", lambda lines: lines.insert(12, "1.05,gap,gap,gap,gap"))
     assert not ok and back == set(_ids(plan, range(99))) - WHOLE
     ok, back = run("cut", lambda lines: lines.append("3.0,cut,cut,cut,cut"))
     assert not ok and back == set(_ids(plan, range(99))) - WHOLE
+    assert not three.get("gap") and not three.get("cut")
 
 
 def _plain_clocks(sampled: Path, folder: Path) -> list[Path]:

@@ -1,0 +1,391 @@
+"""CSV traces whose comparisons read NaN, or with ``unknown`` cells, judged in three-valued
+semantics while they are read: the verdict, LTL3 verdict and evidence
+:func:`fretc.audit.unknown_ticks.judge_three` gives over the whole trace, in memory that does
+not grow with the trace.
+
+A requirement judged as a CSV trace is read (:mod:`fretc.audit.streamed`) gives up at the
+first chunk where one of its comparisons reads NaN, and one reading a column with an
+``unknown`` cell is given up at the end: those ticks are unknown (fretc's NaN rule,
+docs/guide/ticks.md), and its verdict is what every way of filling them agrees on. The
+audit then reads the trace again, within the bytes the first read read
+(:attr:`fretc.logs.CsvSource.extent`), with these streams for each such requirement, each
+the counterpart of one part of the three-valued judge:
+
+* Kleene's reading of the pt formula at the last tick
+  (:class:`fretc.monitors.kleene_stream.KleeneStream`, equal to
+  :meth:`fretc.monitors.three_valued.ThreeValued.pair`);
+* the LTL3 verdict over every letter an unknown tick may be
+  (:class:`fretc.monitors.kleene_stream.Ltl3SetStream`, equal to
+  :func:`fretc.monitors.three_valued.ltl3_verdict`);
+* the evidence of the definite failed triggers
+  (:class:`fretc.monitors.definite_stream.DefiniteStream`, equal to
+  :func:`fretc.monitors.judge3.definite_evidence`);
+* the NaN ticks (how many, the first and the last: the ``nan`` data problem) and the ticks
+  it reads unknown (the NaN ticks and the ``unknown`` cells, whose rows the first read
+  listed: the verdict's unknown ticks and the reason of an unknown verdict);
+* where Kleene's reading is open at the last tick, one more read follows every completion of
+  the unknown ticks (:class:`fretc.monitors.completions_stream.CompletionsStream`, equal to
+  :func:`fretc.monitors.completions.completed_verdict`, with its bounds and their reason).
+
+The verdict is then set by :func:`finalize_three` as :func:`fretc.audit.finalize.finalize`
+sets it after :func:`~fretc.audit.unknown_ticks.judge_three`: the audit JSON is the same
+bytes (``tests/audit/test_streamed.py``). A requirement is judged whole after all where the
+streams cannot take it: an automaton or atom they do not evaluate a chunk at a time (an
+uninterpreted function, a comparison over ``pre``), a leaf of the pt formula that reads
+earlier ticks (the completions' program), more than
+:data:`fretc.monitors.definite_stream.MAX_RUNS` runs of unknown ticks, or a trace with
+``gap`` or ``cut`` rows (judged whole as before). Memory: per requirement the streams'
+state (as :mod:`fretc.audit.streamed`'s, the runs of unknown ticks, at most
+:data:`fretc.monitors.completions.MAX_STATES` states of the completions), and the rows of the
+trace's ``unknown`` cells. CPU: one read of the trace more, two where the completions are
+followed.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Mapping
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from fretc.common.problems import NAN
+from fretc.fretish import ast as A
+from fretc.logs import CsvSource
+from fretc.monitors.definite_stream import DefiniteStream
+from fretc.monitors.expressions import EvidenceUnsupported
+from fretc.monitors.interval import Evidence
+from fretc.monitors.completions import TooManyStates
+from fretc.monitors.completions_stream import CompletionsStream, completions_unsupported
+from fretc.monitors.kleene_stream import KleeneStream, Ltl3SetStream
+from fretc.monitors.nan import nan_ticks_of
+from fretc.monitors.vectorized import VectorizeError
+from fretc.audit.finalize import StreamTicks, decided
+from fretc.audit.streamed import NAN_REASON, UNKNOWN_CELLS, CsvStreams
+from fretc.audit.unknown_ticks import (COMPLETED_NOTE, outgrew_words, pt_decides_note,
+                                       unknown_reason)
+from fretc.audit.verdict import Ltl3
+
+if TYPE_CHECKING:
+    from fretc.audit.model import AuditPlan, RequirementPlan
+    from fretc.audit.verdict import LogAudit, Verdict
+
+__all__ = ["ThreeResult", "ThreeStreams", "finalize_three", "judged_three"]
+
+
+@dataclass
+class ThreeResult:
+    """What the three-valued streams of one requirement decided over the ``n`` rows of a
+    trace (the last at ``last_time``, ns).
+
+    Attributes:
+        holds: FRET's finite-trace verdict in every completion of the NaN ticks (True:
+            satisfied or vacuous; False: violated).
+        evidence: the definite evidence (:class:`fretc.monitors.definite_stream.DefiniteStream`).
+        times: tick -> time (ns) of every tick the evidence names.
+        ltl3: ``(status, tick, time)`` of the three-valued LTL3 verdict.
+        last_hi: the last tick at which the pt formula may be true (None: none).
+        possible_trigger: a trigger may have fired in unknown ticks.
+        nan: the NaN ticks: ``(count, first tick, its time, last tick, its time)``.
+        unknown: the ticks it reads unknown (NaN, ``unknown`` cells): ``(count, first
+            tick, its time)``; ``what`` makes them unknown, in words; ``cells``: column ->
+            the rows (ascending) of its ``unknown`` cells, for the columns it reads with one
+            (a value shown there is None, as the whole-trace audit shows it).
+        completed: the verdict was decided by following every completion
+            (:mod:`fretc.monitors.completions`); ``outgrew``: why they were not all
+            followed (empty: they were).
+    """
+
+    holds: bool | None
+    evidence: Evidence
+    times: dict[int, int]
+    ltl3: tuple[str, int | None, int | None]
+    last_hi: int | None
+    possible_trigger: bool
+    nan: tuple[int, int, int, int, int]
+    n: int
+    last_time: int
+    unknown: tuple[int, int, int]
+    what: str
+    cells: dict[str, np.ndarray]
+    completed: bool = False
+    outgrew: str = ""
+
+
+@dataclass
+class _Three:
+    """One requirement's three-valued streams while the trace is read."""
+
+    r: RequirementPlan
+    names: tuple[str, ...]
+    exprs: list[A.Expr]
+    kleene: KleeneStream
+    definite: DefiniteStream
+    ltl3: Ltl3SetStream | None
+    nan: list[int] = field(default_factory=lambda: [0, -1, 0, -1, 0])
+    #: the ticks it reads unknown (unknown cells, NaN): count, the first and its time
+    unknown: list[int] = field(default_factory=lambda: [0, -1, 0])
+    cells: bool = False  # (some unknown cell read)
+    nan_only: bool = False  # (some NaN tick without an unknown cell)
+    gave_up: str | None = None
+
+
+def _three_of(r: RequirementPlan) -> _Three | str:
+    """The streams of ``r`` (a requirement :mod:`fretc.audit.streamed` took), or why they
+    cannot be made."""
+    req, f = r.requirement, r.formalization
+    assert req is not None and f is not None  # (streamed before: formalized)
+    try:
+        kleene = KleeneStream(f.pt)
+        definite = DefiniteStream(req, f.ticks)
+        ltl3 = (None if r.offline or r.monitor_source is None
+                else Ltl3SetStream(r.monitor_source))
+    except (EvidenceUnsupported, VectorizeError) as exc:
+        return str(exc)
+    exprs = [req.scope.mode, req.condition.expr, req.timing.stop, req.response]
+    exprs += [p.expr for p in req.condition.parts]
+    return _Three(r, tuple(r.variables), [e for e in exprs if e is not None], kleene,
+                  definite, ltl3)
+
+
+@dataclass
+class ThreeStreams:
+    """The requirements of a CSV audit judged in three-valued semantics while the trace is
+    read again: the sink (:data:`fretc.logs.csv.read.RowSink`) handed to
+    :class:`fretc.logs.CsvSource`. Build it with :meth:`of`; after the read, :meth:`close`
+    says which it decided (:attr:`results`) and which must be judged whole (:attr:`whole`)."""
+
+    streams: list[_Three]
+    n: int = 0
+    last_time: int | None = None
+    results: dict[int, ThreeResult] = field(default_factory=dict)
+    whole: dict[int, str] = field(default_factory=dict)
+    #: requirement index -> (its plan, the first and last ticks a leaf of its pt formula is
+    #: unknown at): Kleene's reading open at the last tick, every completion to follow
+    open: dict[int, tuple[RequirementPlan, tuple[int, int] | None]] = field(
+        default_factory=dict)
+    #: column -> the rows (ascending) of its ``unknown`` cells, as the first read found them
+    unknown_rows: dict[str, np.ndarray] = field(default_factory=dict)
+
+    @classmethod
+    def of(cls, requirements: Iterable[RequirementPlan]) -> ThreeStreams:
+        """The streams of each requirement of ``requirements`` whose streams can be made;
+        the others in :attr:`whole` with the reason."""
+        out = cls([])
+        for r in requirements:
+            got = _three_of(r)
+            if isinstance(got, str):
+                out.whole[r.index] = got
+            else:
+                out.streams.append(got)
+        return out
+
+    @property
+    def names(self) -> set[str]:
+        """The columns the streams read."""
+        return {n for s in self.streams for n in s.names}
+
+    def __call__(self, first: int, times: np.ndarray, columns: dict[str, np.ndarray]
+                 ) -> None:
+        """Feed a chunk of rows (:data:`fretc.logs.csv.read.RowSink`) to every stream."""
+        k = len(times)
+        if k == 0:
+            return
+        self.last_time = int(times[-1])
+        self.n = first + k
+        marked = _cells(self.unknown_rows, first, k)
+        for s in self.streams:
+            if s.gave_up is None:
+                try:
+                    _feed(s, columns, k, times, first, marked)
+                except (KeyError, VectorizeError, EvidenceUnsupported) as exc:
+                    s.gave_up = f"cannot be read a chunk at a time ({exc})"
+
+    def close(self) -> None:
+        """After the read: each requirement's result, or why it is judged whole after all."""
+        for s in self.streams:
+            i = s.r.index
+            lo, hi, last_hi = s.kleene.finish() if self.n else (False, True, None)
+            why = s.gave_up or ("more runs of unknown ticks than the streams keep"
+                                if s.definite.too_many else None)
+            if why is None and lo != hi:
+                why = completions_unsupported(s.r.formalization.pt)  # type: ignore[union-attr]
+            if why is None and s.unknown[0] and self.last_time is not None:
+                ev, times = s.definite.finish()
+                ltl3 = s.ltl3.finish() if s.ltl3 is not None else ("unknown", None, None)
+                if ltl3[1] is not None and ltl3[2] is not None:  # (a violation may be shown there)
+                    times = {**times, ltl3[1]: ltl3[2]}
+                marked = [c for c in s.names if len(self.unknown_rows.get(c, ()))]
+                what = ", ".join(([f"unknown values of {', '.join(marked)}"] if marked
+                                  else []) + (["comparisons with NaN"]
+                                              if s.nan_only or not marked else []))
+                self.results[i] = ThreeResult(lo if lo == hi else None, ev, times, ltl3,
+                                              last_hi, s.definite.possible_trigger,
+                                              (s.nan[0], s.nan[1], s.nan[2], s.nan[3],
+                                               s.nan[4]), self.n, self.last_time,
+                                              (s.unknown[0], s.unknown[1], s.unknown[2]),
+                                              what, {c: self.unknown_rows[c] for c in marked})
+                if lo != hi:  # (open: every completion followed, another read)
+                    self.open[i] = (s.r, s.kleene.free)
+            else:
+                self.whole[i] = why or "no NaN tick read"
+        self.streams = []
+
+
+def _cells(unknown_rows: Mapping[str, np.ndarray], first: int, k: int
+           ) -> dict[str, np.ndarray]:
+    """Column -> its ``unknown`` cells among the rows ``first .. first+k-1`` (a bool array
+    of ``k``), for the columns with one there."""
+    out = {}
+    for c, rows in unknown_rows.items():
+        at = rows[np.searchsorted(rows, first):np.searchsorted(rows, first + k)] - first
+        if len(at):
+            mask = out[c] = np.zeros(k, np.bool_)
+            mask[at] = True
+    return out
+
+
+def _feed(s: _Three, columns: Mapping[str, np.ndarray], k: int, times: np.ndarray,
+          first: int, marked: Mapping[str, np.ndarray]) -> None:
+    """Feed one chunk of ``k`` rows (the trace's rows ``first ..``; ``marked``: column ->
+    its ``unknown`` cells in the chunk) to the streams of ``s``. Raises KeyError for a
+    missing column, or what the streams raise."""
+    cols = {n: np.asarray(columns[n])[:k] for n in s.names}
+    nan = nan_ticks_of(s.exprs, cols, k)
+    bad = np.flatnonzero(nan)
+    if len(bad):
+        if s.nan[0] == 0:
+            s.nan[1], s.nan[2] = first + int(bad[0]), int(times[bad[0]])
+        s.nan[0] += len(bad)
+        s.nan[3], s.nan[4] = first + int(bad[-1]), int(times[bad[-1]])
+    unknown = {n: m for n, m in marked.items() if n in s.names}
+    if unknown:  # (the ticks it reads unknown: the unknown cells and the NaN ticks)
+        cells = np.logical_or.reduce(list(unknown.values()))
+        s.cells = s.cells or bool(cells.any())
+        s.nan_only = s.nan_only or bool((nan & ~cells).any())
+        nan = nan | cells
+    else:
+        s.nan_only = s.nan_only or bool(len(bad))
+    at = np.flatnonzero(nan)
+    if len(at):
+        if s.unknown[0] == 0:
+            s.unknown[1], s.unknown[2] = first + int(at[0]), int(times[at[0]])
+        s.unknown[0] += len(at)
+    s.kleene.feed(cols, unknown, k)
+    s.definite.feed(cols, unknown, k, times)
+    if s.ltl3 is not None:
+        s.ltl3.feed(cols, unknown, k, times)
+
+
+def judged_three(plan: AuditPlan, streams: CsvStreams, source: CsvSource) -> None:
+    """Read the CSV trace of ``source`` again (within its first read's bytes,
+    :attr:`fretc.logs.CsvSource.extent`) with the three-valued streams of the requirements
+    ``streams`` gave up for a NaN (:data:`NAN_REASON`), on a trace without ``gap`` or
+    ``cut`` rows and without ``unknown`` cells in the columns they read; those decided move
+    from ``streams.whole`` to ``streams.results`` (a :class:`ThreeResult`)."""
+    if source.gap_rows or source.cut_time is not None:
+        return
+    by_index = {r.index: r for r in plan.requirements}
+    todo = [by_index[i] for i, why in streams.whole.items()
+            if why == NAN_REASON or why.startswith(UNKNOWN_CELLS)]
+    three = ThreeStreams.of(todo)
+    if not three.streams:
+        return
+    three.unknown_rows = {c: np.asarray(sorted(rows), np.int64)
+                          for c, rows in source.unknown_rows.items() if c in three.names}
+    CsvSource(str(source.path), period_ns=source.period_ns, keep=(), sink=three,
+              streamed=three.names, keep_times=False, extent=source.extent)
+    three.close()
+    if three.n != streams.n:  # (the same rows as the first read, or judged whole)
+        return
+    if three.open:
+        _completions(source, three)
+    for i, got in three.results.items():
+        streams.results[i] = got  # type: ignore[assignment]  # (a ThreeResult beside them)
+        del streams.whole[i]
+
+
+def _completions(source: CsvSource, three: ThreeStreams) -> None:
+    """Follow every completion of the requirements whose Kleene reading is open
+    (``three.open``) in one more read of the trace (within the first read's bytes), and
+    set their results' verdicts: :func:`fretc.monitors.completions.decide`'s."""
+    runs: dict[int, tuple[RequirementPlan, CompletionsStream]] = {}
+    for i, (r, free) in three.open.items():
+        got = three.results[i]
+        if free is None:  # (no leaf unknown: Kleene's reading is the verdict)
+            got.holds = False
+            continue
+        assert r.formalization is not None  # (streamed: formalized)
+        runs[i] = (r, CompletionsStream(r.formalization.pt, free[0], free[1], three.n))
+    if not runs:
+        return
+    failed: dict[int, str] = {}
+
+    def sink(first: int, times: np.ndarray, columns: dict[str, np.ndarray]) -> None:
+        k = len(times)
+        for i, (r, run) in runs.items():
+            if i in failed or k == 0:
+                continue
+            cols = {n: np.asarray(columns[n])[:k] for n in r.variables}
+            cells = {c: m for c, m in _cells(three.unknown_rows, first, k).items()
+                     if c in cols}
+            try:
+                run.feed(cols, cells, k)
+            except TooManyStates as exc:
+                failed[i] = str(exc)
+
+    names = {n for r, _ in runs.values() for n in r.variables}
+    CsvSource(str(source.path), period_ns=source.period_ns, keep=(), sink=sink,
+              streamed=names, keep_times=False, extent=source.extent)
+    for i, (_r, run) in runs.items():
+        got = three.results[i]
+        if i in failed:
+            got.holds, got.outgrew = None, failed[i]
+        else:
+            got.holds = run.finish()
+            got.completed = got.holds is not None
+
+
+def finalize_three(plan: AuditPlan, r: RequirementPlan, got: ThreeResult, v: Verdict,
+                   la: LogAudit) -> bool:
+    """Set the verdict ``v`` of ``r`` from what its three-valued streams decided (``got``),
+    as :func:`fretc.audit.finalize.finalize` sets it after
+    :func:`fretc.audit.unknown_ticks.judge_three`: the ``nan`` data problem of its NaN
+    ticks in ``la``, the unknown ticks, the definite counts, the LTL3 verdict, the notes
+    and the verdict. Returns True for a violation (its values around the trigger and the
+    violation are still to be read: :func:`fretc.audit.streamed_verdict.streamed_values`)."""
+    count, first, first_time, last, last_time = got.nan
+    if count:
+        what = (f"{count} tick{'s' if count != 1 else ''} of {r.id} compare NaN (first at "
+                f"tick {first}, {first_time} ns; last at tick {last}, {last_time} ns): a "
+                "comparison with NaN is neither true nor false, so those ticks are unknown")
+        la.problems.append({"kind": NAN, "topic": None, "log_time_ns": first_time,
+                            "end_time_ns": last_time, "detail": what})
+        la.problem_counts[f"{NAN} {r.id}"] = count
+    v.engine = "interval"
+    ev, holds = got.evidence, got.holds
+    count, first, first_time = got.unknown
+    v.unknown_ticks = count
+    v.intervals, v.triggers, v.violations = ev.intervals, ev.triggers, ev.violations
+    status, tick, time = got.ltl3
+    if holds is None:
+        v.verdict = "unknown"
+        v.unknown_reason = unknown_reason(count, got.n, got.what, first, first_time,
+                                          outgrew_words(got.outgrew))
+        ev.vacuous = False
+        v.ltl3 = Ltl3(status, tick, time)
+        return False
+    if holds and ev.triggers == 0:
+        ev.vacuous = True
+        if got.possible_trigger:
+            v.notes.append("vacuous on the ticks read: a trigger may have fired in unknown "
+                           "ticks, and the requirement holds whichever way")
+    else:
+        ev.vacuous = False
+    if not holds and ev.violation is None:
+        v.notes.append(COMPLETED_NOTE if got.completed else pt_decides_note(got.last_hi))
+    v.ltl3 = Ltl3(status, tick, time)
+    v.notes.append(f"robustness unavailable: {count} of its ticks are unknown")
+    decided(plan, r, v, holds, ev, status, tick, got.n,
+            lambda: StreamTicks(got.times, got.n, got.last_time))
+    return v.verdict == "violated"

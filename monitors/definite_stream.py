@@ -1,0 +1,227 @@
+"""FRET's interval semantics over a trace with unknown ticks (a comparison reading NaN, an
+unknown value), fed a chunk of ticks at a time: the evidence the three-valued judge shows
+(:func:`fretc.monitors.judge3.definite_evidence` of
+:func:`fretc.monitors.interval.evaluate_requirement` with ``favour``), in memory that does
+not grow with the trace's ticks.
+
+:class:`DefiniteStream` feeds an :class:`~fretc.monitors.interval_stream.IntervalStream`
+each chunk's signals with their unknown ticks set to meet the obligation (``favour``), so it
+lists the failed triggers the known ticks make, in the whole-trace order. Alongside it:
+
+* **the definite triggers** are counted as each chunk's trigger points pass (the
+  stream's ``on_triggers``): a trigger is definite when the scope mode is known over the
+  ticks that place it in its interval and the condition is known where it fires
+  (:meth:`fretc.monitors.unknowns.Unknowns.in_scope_known` and ``trigger_known``; every
+  range ends at the trigger, so the ticks read so far decide it). Where the condition is
+  known at a tick and the tick before, its favoured value is its value, so the stream's
+  trigger points are the trace's there;
+* **the unknown ticks of each part** (scope mode, condition, response, stop condition) are
+  kept as runs of ticks, so that at the end each listed failed trigger is kept only when
+  its interval's bounds, its trigger and its missed obligation are known
+  (:class:`~fretc.monitors.unknowns.Unknowns`' own tests, asked of the runs).
+
+Memory: the interval stream's, and two ticks per run of unknown ticks: at most
+:data:`MAX_RUNS` runs a part (past them the stream says :attr:`DefiniteStream.too_many`, and
+the caller judges the trace whole).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+
+import numpy as np
+
+from fretc.fretish import ast as A
+from fretc.monitors.interval import Evidence
+from fretc.monitors.interval_stream import IntervalStream
+from fretc.monitors.unknowns import Unknowns
+
+__all__ = ["DefiniteStream", "MAX_RUNS"]
+
+#: The most runs of unknown ticks kept per part of a requirement (two int64 each)
+MAX_RUNS = 1 << 16
+#: scopes whose interval the mode's first occurrence places (as monitors/unknowns.py)
+_FIRST_OCCURRENCE = ("before", "after", "onlyBefore", "onlyAfter")
+
+
+class _RunMask:
+    """A part's unknown ticks over ``n`` ticks as runs ``[starts[i], ends[i]]``, read as
+    :class:`~fretc.monitors.unknowns.Unknowns` reads its bool arrays: ``mask[t]`` a bool,
+    ``mask[lo:hi].any()`` whether a run meets ``lo .. hi-1``."""
+
+    def __init__(self, starts: np.ndarray, ends: np.ndarray) -> None:
+        self.starts, self.ends = starts, ends
+
+    def __getitem__(self, key: int | slice) -> _Any:
+        if isinstance(key, slice):
+            lo, hi = key.start or 0, key.stop
+            return _Any(hi is not None and hi > lo and self._meets(lo, hi - 1))
+        return _Any(self._meets(key, key))
+
+    def _meets(self, lo: int, hi: int) -> bool:
+        i = int(np.searchsorted(self.ends, lo))  # (the first run ending at or after lo)
+        return i < len(self.starts) and int(self.starts[i]) <= hi
+
+    def any(self) -> bool:
+        """Whether the part is unknown at some tick."""
+        return bool(len(self.starts))
+
+
+class _Any:
+    """A bool that also answers ``.any()`` (a slice of a :class:`_RunMask`)."""
+
+    def __init__(self, value: bool) -> None:
+        self.value = value
+
+    def any(self) -> bool:
+        return self.value
+
+    def __bool__(self) -> bool:
+        return self.value
+
+
+class _Runs:
+    """The runs of unknown ticks of one part, appended a chunk at a time."""
+
+    def __init__(self) -> None:
+        self.starts: list[np.ndarray] = []
+        self.ends: list[np.ndarray] = []
+        self.count = 0
+        self.last_end = -2  # the last run's end (-2: none)
+
+    def add(self, mask: np.ndarray, n0: int) -> None:
+        """The chunk's unknown ticks ``mask`` (bool), its first at the trace's tick ``n0``."""
+        if not mask.any():
+            return
+        d = np.diff(mask.view(np.int8), prepend=np.int8(0), append=np.int8(0))
+        starts = np.flatnonzero(d == 1) + n0
+        ends = np.flatnonzero(d == -1) - 1 + n0
+        if self.last_end == n0 - 1 and starts[0] == n0:  # (a run going on from the chunk before)
+            self.ends[-1][-1] = ends[0]
+            starts, ends = starts[1:], ends[1:]
+        if len(starts):
+            self.starts.append(starts.astype(np.int64))
+            self.ends.append(ends.astype(np.int64))
+            self.count += len(starts)
+        self.last_end = int(self.ends[-1][-1])
+
+    def mask(self) -> _RunMask:
+        """The runs as a :class:`_RunMask`."""
+        if not self.starts:
+            return _RunMask(np.zeros(0, np.int64), np.zeros(0, np.int64))
+        return _RunMask(np.concatenate(self.starts), np.concatenate(self.ends))
+
+
+class DefiniteStream:
+    """The three-valued judge's evidence of ``req`` over a trace fed a chunk at a time
+    (module docstring).
+
+    Args:
+        req: a requirement :func:`fretc.monitors.interval_stream.stream_unsupported` takes.
+        duration_ticks: as :class:`~fretc.monitors.interval_stream.IntervalStream`'s.
+
+    Raises:
+        EvidenceUnsupported: as :class:`~fretc.monitors.interval_stream.IntervalStream`.
+
+    Attributes:
+        too_many: some part had more than :data:`MAX_RUNS` runs of unknown ticks (the
+            evidence is then not made: judge the trace whole).
+        possible_trigger: a trigger may have fired in unknown ticks (the scope mode or the
+            condition unknown somewhere: :func:`fretc.monitors.unknowns.possible_trigger`).
+    """
+
+    def __init__(self, req: A.Requirement, duration_ticks: int | None) -> None:
+        self.req = req
+        self.interval = IntervalStream(req, duration_ticks)
+        self.interval.on_triggers = self._triggers
+        self.scope, self.cond = req.scope.kind, req.condition.kind
+        self.runs = {part: _Runs() for part in "MCRS"}
+        self.n = 0
+        self.too_many = False
+        self.possible_trigger = False
+        self.triggers = 0
+        self.first_trigger: tuple[int, int] | None = None
+        self._m_first: int | None = None  # the first tick the mode is unknown at
+        self._m_last = -1  # the last such tick before the chunk
+        self._c_last = False  # the condition unknown at the tick before the chunk
+        self._u: Unknowns | None = None  # the chunk's
+
+    def feed(self, columns: Mapping[str, np.ndarray], unknown: Mapping[str, np.ndarray],
+             k: int, times: np.ndarray) -> None:
+        """The next ``k >= 0`` ticks: ``columns`` as the interval stream takes them,
+        ``unknown`` variable -> bool array of ``k`` (its unknown ticks; a comparison with
+        NaN is unknown, fretc's NaN rule), ``times`` int64 ns."""
+        if k <= 0:
+            return
+        cols = {name: np.asarray(c)[:k] for name, c in columns.items()}
+        u = Unknowns.of(self.req, unknown, cols, k, True)
+        for part in "MCRS":
+            runs = self.runs[part]
+            runs.add(getattr(u, part), self.n)
+            self.too_many = self.too_many or runs.count > MAX_RUNS
+        if self._m_first is None and u.M.any():
+            self._m_first = self.n + int(np.argmax(u.M))
+        self.possible_trigger = self.possible_trigger or bool(u.M.any() or u.C.any())
+        self._u = u
+        self.interval.feed(cols, k, times, favour=u)
+        if u.M.any():
+            self._m_last = self.n + int(np.flatnonzero(u.M)[-1])
+        self._c_last = bool(u.C[-1])
+        self.n += k
+
+    def _triggers(self, n0: int, T: np.ndarray, starts: np.ndarray, opened: int | None,
+                  times: np.ndarray) -> None:
+        """Count the chunk's definite triggers (module docstring)."""
+        if not len(T):
+            return
+        u = self._u
+        assert u is not None  # (fed)
+        j = np.searchsorted(starts, T, side="right") - 1
+        s = np.where(j >= 0, n0 + starts[np.maximum(j, 0)] if len(starts) else 0,
+                     -1 if opened is None else opened)
+        t = n0 + T
+        ok = np.ones(len(T), np.bool_)
+        scope = self.scope
+        first = self._m_first if self._m_first is not None else 1 << 62
+        if scope in ("after", "onlyBefore"):
+            ok &= first > s
+        elif scope in ("before", "onlyAfter"):
+            ok &= first > t
+        elif scope != "null":  # the mode known on [max(s - 1, 0), t]
+            last = np.maximum.accumulate(np.where(u.M, np.arange(len(u.M)) + n0, -1))
+            ok &= np.maximum(last[T], self._m_last) < np.maximum(s - 1, 0)
+        if self.cond != "null":
+            ok &= ~u.C[T]
+            if self.cond != "holding":
+                before = np.where(T > 0, u.C[np.maximum(T - 1, 0)], self._c_last)
+                ok &= (t == s) | ~before
+        count = int(ok.sum())
+        self.triggers += count
+        if count and self.first_trigger is None:
+            i = int(np.argmax(ok))
+            self.first_trigger = (int(t[i]), int(times[T[i]]))
+
+    def finish(self) -> tuple[Evidence, dict[int, int]]:
+        """The evidence (its ``holds`` and ``vacuous`` the favoured stream's: the caller's
+        three-valued verdict decides them) and the times of the ticks it names, as
+        :meth:`~fretc.monitors.interval_stream.IntervalStream.finish` gives them.
+
+        Raises:
+            ValueError: no tick was fed."""
+        ev, times = self.interval.finish()
+        u = Unknowns(self.n, *(self.runs[p].mask() for p in "MCRS"))  # type: ignore[arg-type]
+        negate = self.scope.startswith("only")
+        listed = [w for w in ev.listed
+                  if u.scope_known(w.interval[0], w.interval[1], self.scope)
+                  and u.trigger_known(w.trigger_tick, w.interval[0], self.cond)
+                  and u.missed_known(w.trigger_tick, w.window[0], w.violation_tick,
+                                     self.req.timing.kind, negate)]
+        first = None
+        if self.first_trigger is not None:
+            first = self.first_trigger[0]
+            times = {**times, first: self.first_trigger[1]}
+        return Evidence(holds=ev.holds, vacuous=ev.vacuous, intervals=ev.intervals,
+                        triggers=self.triggers, violations=len(listed),
+                        violation=listed[0] if listed else None, ticks=ev.ticks,
+                        first_interval=ev.first_interval, first_trigger=first,
+                        listed=listed), times
