@@ -213,7 +213,7 @@ def unknown_of(r: RequirementPlan, res: ClockPass, nan_unknown: bool) -> np.ndar
     variables unknown, or (``nan_unknown``) one of its comparisons reads NaN."""
     n = len(res.times)
     out = np.zeros(n, np.bool_)
-    for name in (*r.variables, *r.stream_names):
+    for name in r.judged_variables:
         m = res.unknown.get(name)
         if m is not None:
             out |= m[:n]

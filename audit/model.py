@@ -84,6 +84,18 @@ class RequirementPlan:
         return system.names if system is not None else ()
 
     @property
+    def judged_variables(self) -> list[str]:
+        """The variables whose unknown ticks are the requirement's: :attr:`variables`, but
+        with stream variables those its formulas read (the streams, not the inputs only
+        they read: a stream is unknown where an unknown input changes it,
+        :mod:`fretc.audit.streams`)."""
+        system, f = self.streams, self.formalization
+        if system is None or f is None:
+            return self.variables
+        own = list(f.variables)
+        return own + [n for n in system.names if n not in own]
+
+    @property
     def monitor_source(self) -> MonitorSource:
         """codegen's :class:`~fretc.compiler.codegen.MonitorSource` (the LTL3 automata tables the
         judge runs, :mod:`fretc.monitors.judge`), built on first use and kept."""

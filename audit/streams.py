@@ -12,17 +12,18 @@ the CSV judge that streams rows does not (:func:`fretc.audit.streamed.unstreamed
 such a requirement's verdict is the whole-trace judge's on every path.
 
 Unknown values (a gap, an ``unknown`` cell, a ``gap`` row, and NaN under fretc's NaN rule):
-a stream holds what it read, so from the first tick at which an input it reads is unknown,
-each stream variable is unknown at every later tick (sound: no verdict rests on a value
-computed from an unknown one; the three-valued judge decides over them,
-:mod:`fretc.audit.unknown_ticks`).
+each stream variable is unknown at a tick where its definition's value could differ for some
+value of the unknown inputs it reads, by Kleene's logic over the definition, tick by tick
+(``false and x`` is known whatever ``x``; ``if c then a else b`` with ``c`` known is the
+branch taken; a value held through ``pre`` is as known as when it was read), so a stream
+reset by known values is known again; the three-valued judge decides over the ticks it is
+unknown at (:mod:`fretc.audit.unknown_ticks`). Sound: no verdict rests on a value an unknown
+input could change.
 """
 
 from __future__ import annotations
 
 from dataclasses import replace
-
-import numpy as np
 
 from fretc.audit.columns import ClockPass
 from fretc.audit.model import RequirementPlan
@@ -33,26 +34,19 @@ __all__ = ["with_streams"]
 
 def with_streams(r: RequirementPlan, res: ClockPass, nan_unknown: bool) -> ClockPass:
     """``res`` with the columns of ``r``'s stream variables (module docstring) added, and
-    their unknown masks in ``res.unknown`` (from the first tick an input is unknown on, or
-    with ``nan_unknown`` reads NaN); ``res`` itself when ``r`` reads none, or when an input
-    has no column (its requirement is an error already)."""
+    their unknown masks in ``res.unknown`` (where an input it reads is unknown, or with
+    ``nan_unknown`` reads NaN, could change its value); ``res`` itself when ``r`` reads
+    none, or when an input has no column (its requirement is an error already)."""
     system = r.streams
     if system is None or any(name not in res.columns for name in system.inputs):
         return res
     n = len(res.times)
-    columns = {**res.columns, **stream_columns(system, res.columns, n)}
-    bad = np.zeros(n, np.bool_)
-    for name in system.inputs:
-        mask = res.unknown.get(name)
-        if mask is not None:
-            bad |= mask[:n]
-        col = res.columns[name][:n]
-        if nan_unknown and col.dtype.kind == "f":
-            bad |= np.isnan(col)
+    got = stream_columns(system, res.columns, n, res.unknown, nan_unknown)
     unknown = dict(res.unknown)
-    if bad.any():
-        held = np.zeros(n, np.bool_)
-        held[int(np.argmax(bad)):] = True
-        for name in system.names:
-            unknown[name] = held
-    return replace(res, columns=columns, unknown=unknown)
+    for name in system.names:
+        mask = got.pop(f"{name}?")
+        if mask.any():
+            unknown[name] = mask
+        else:
+            unknown.pop(name, None)
+    return replace(res, columns={**res.columns, **got}, unknown=unknown)

@@ -82,7 +82,7 @@ def judge_three(r: RequirementPlan, res: ClockPass, v: Verdict, j: Judgement, na
         holds = _at_cut(r, res, v, holds, ev, status, st_tick, n)
     elif holds is None:
         v.verdict = "unknown"
-        v.unknown_reason = _why(res, unknown, n, outgrew, (*r.variables, *r.stream_names))
+        v.unknown_reason = _why(res, unknown, n, outgrew, r.judged_variables)
     if holds is True and ev is not None and ev.triggers == 0:
         ev.vacuous = True
         if parts is not None and possible_trigger(parts):

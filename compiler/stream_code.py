@@ -61,18 +61,27 @@ class StreamCode:
     outputs: list[str] = field(default_factory=list)
     updates: list[str] = field(default_factory=list)
     inputs: list[str] = field(default_factory=list)
+    #: with ``known`` (:func:`stream_code`): per local, slot and input, the expression
+    #: (a local, ``True``) of whether its value is known
+    knowns: dict[str, str] = field(default_factory=dict)
 
 
-def stream_code(system: StreamSystem, lang: str = "py", prefix: str = "") -> StreamCode:
+def stream_code(system: StreamSystem, lang: str = "py", prefix: str = "",
+                known: bool = False) -> StreamCode:
     """The code of one tick of ``system`` in ``lang`` (``"py"``, ``"c"``); ``prefix``
     starts every name (the state's, the locals', the inputs'). The first tick is read from
-    a variable ``first`` (``prefix + "first"``) the caller keeps.
+    a variable ``first`` (``prefix + "first"``) the caller keeps. With ``known`` (Python),
+    each value has a truth value of its own, whether it is known (``knowns``), by Kleene's
+    logic from whether the inputs are (``k`` + an input's name; a comparison reading NaN is
+    unknown where ``nan_unknown`` is true): the audit's unknown ticks.
 
     Raises:
         ValueError: a node no stream is computed with (the reader keeps those free:
             :func:`fretc.fretish.fret_definitions.definitions`)."""
     code = StreamCode(lang, inputs=[f"{prefix}x{k}" for k in range(len(system.inputs))])
     em = _Emitter(code, system, prefix)
+    em.track = known
+    code.knowns.update({x: f"k{x}" for x in code.inputs} if known else {})
     for name, e in zip(system.names, system.exprs):
         local = em.node(e)
         em.known[name] = local
@@ -96,10 +105,24 @@ class _Emitter:
         self.types.update(zip(system.names, system.booleans))
         self.operands: list[A.Expr] = []
         self.count = 0
+        self.track = False
 
-    def local(self, text: str, boolean: bool) -> str:
+    def k(self, x: str) -> str:
+        """Whether the value ``x`` (a local, slot, input or literal) is known."""
+        return self.code.knowns.get(x, "True")
+
+    def knows(self, x: str, text: str) -> str:
+        """``x``, whose known flag is ``text`` (a local of its own unless a name)."""
+        if self.track:
+            if text.isidentifier():
+                self.code.knowns[x] = text
+            else:
+                self.code.knowns[x] = self.local(text, True, "k")
+        return x
+
+    def local(self, text: str, boolean: bool, kind: str = "n") -> str:
         self.count += 1
-        name = f"{self.prefix}n{self.count}"
+        name = f"{self.prefix}{kind}{self.count}"
         self.code.lines.append((name, text))
         if boolean:
             self.code.bools.add(name)
@@ -118,21 +141,28 @@ class _Emitter:
         if isinstance(e, A.Unary):
             a = self.node(e.operand)
             if e.op == "!":
-                return self.local(f"!{a}" if c else f"not {a}", True)
-            return self.local(f"(-{a})" if c else f"-{a}", False)
+                return self.knows(self.local(f"!{a}" if c else f"not {a}", True), self.k(a))
+            return self.knows(self.local(f"(-{a})" if c else f"-{a}", False), self.k(a))
         if isinstance(e, A.Binary):
             a, b = self.node(e.left), self.node(e.right)
             form = _CMP.get(e.op)
             if form is not None:
-                return self.local(f"({a} {form} {b})" if c else f"{a} {form} {b}", True)
+                return self.knows(self.local(f"({a} {form} {b})" if c else f"{a} {form} {b}",
+                                             True),
+                                  f"{self.k(a)} and {self.k(b)} and (not nan_unknown or "
+                                  f"({a} == {a} and {b} == {b}))")
             if e.op not in _PY:
                 raise ValueError(f"operator {e.op!r} in a stream's definition")
-            return self.local((_C if c else _PY)[e.op].format(a, b),
-                              e.op in ("&", "|", "xor", "->", "<->"))
+            return self.knows(self.local((_C if c else _PY)[e.op].format(a, b),
+                                         e.op in ("&", "|", "xor", "->", "<->")),
+                              _kleene(e.op, a, b, self.k(a), self.k(b)))
         if isinstance(e, A.Call) and e.name == "ite":
             x, a, b = (self.node(y) for y in e.args)
-            return self.local(f"({x} ? {a} : {b})" if c else f"{a} if {x} else {b}",
-                              is_boolean(e, self.types))
+            return self.knows(
+                self.local(f"({x} ? {a} : {b})" if c else f"{a} if {x} else {b}",
+                           is_boolean(e, self.types)),
+                f"({self.k(x)} and ({self.k(a)} if {x} else {self.k(b)})) or "
+                f"({self.k(a)} and {self.k(b)} and {a} == {b})")
         if isinstance(e, A.Call) and e.name in _PRE and isinstance(
                 e.args[0], (A.BoolLit, A.NumLit)):
             slot = f"{self.prefix}s{len(self.code.slots)}"
@@ -141,18 +171,37 @@ class _Emitter:
             self.operands.append(e.args[1])
             if boolean:
                 self.bools.add(slot)
+            if self.track:
+                self.code.knowns[slot] = f"k{slot}"
             return slot
         raise ValueError(f"{type(e).__name__} {getattr(e, 'name', '')} in a stream's "
                          "definition")
+
+
+def _kleene(op: str, a: str, b: str, ka: str, kb: str) -> str:
+    """Whether ``a op b`` is known, ``ka``/``kb`` whether its operands are (Kleene's
+    logic: ``false and x`` is known whatever ``x``)."""
+    both = f"({ka} and {kb})"
+    if op == "&":
+        return f"{both} or ({ka} and not {a}) or ({kb} and not {b})"
+    if op == "|":
+        return f"{both} or ({ka} and {a}) or ({kb} and {b})"
+    if op == "->":
+        return f"{both} or ({ka} and not {a}) or ({kb} and {b})"
+    return both
 
 
 def python_tick(code: StreamCode, indent: str) -> list[str]:
     """The Python lines of one tick of ``code`` (``lang == "py"``) at ``indent``: the
     locals, then the slots set (reading the locals; the first-tick flag is the caller's)."""
     out = [f"{indent}{x} = {text}" for x, text in code.lines]
-    if code.slots:
-        out.append(f"{indent}{', '.join(s for s, _i, _b in code.slots)} = "
-                   f"{', '.join(code.updates)}")
+    slots = [s for s, _i, _b in code.slots]
+    nexts = list(code.updates)
+    if code.knowns:
+        slots += [f"k{s}" for s in slots]
+        nexts += [code.knowns.get(u, "True") for u in code.updates]
+    if slots:
+        out.append(f"{indent}{', '.join(slots)} = {', '.join(nexts)}")
     return out
 
 
@@ -216,36 +265,59 @@ def _pow(a: float, b: float) -> float:
 
 @functools.lru_cache(maxsize=64)
 def _runner(system: StreamSystem) -> Callable[..., tuple[list, ...]]:
-    """A Python function ``run(n, x0, x1, ...)`` of the system's inputs as lists of ``n``
-    values, returning each variable's ``n`` values (lists)."""
-    code = stream_code(system)
-    args = ", ".join(["n"] + [f"c{k}" for k in range(len(code.inputs))])
-    src = [f"def run({args}):"]
-    src += [f"    o{k} = [None] * n" for k in range(len(code.outputs))]
-    src += [f"    {s} = {init}" for s, init, _b in code.slots]
+    """A Python function ``run(n, nan_unknown, c0, kc0, c1, kc1, ...)`` of the system's
+    inputs as lists of ``n`` values and of whether each is known, returning each
+    variable's ``n`` values, then whether each is known (lists)."""
+    code = stream_code(system, known=True)
+    ins = [f"c{k}, kc{k}" for k in range(len(code.inputs))]
+    outs = [f"o{k}" for k in range(len(code.outputs))]
+    outs += [f"k{x}" for x in outs]
+    src = [f"def run({', '.join(['n', 'nan_unknown'] + ins)}):"]
+    src += [f"    {x} = [None] * n" for x in outs]
+    src += [f"    {s} = {init}\n    k{s} = True" for s, init, _b in code.slots]
     src += ["    first = True", "    for t in range(n):"]
-    src += [f"        {x} = c{k}[t]" for k, x in enumerate(code.inputs)]
+    src += [f"        {x} = c{k}[t]\n        k{x} = kc{k}[t]"
+            for k, x in enumerate(code.inputs)]
     src += python_tick(code, "        ")
-    src += [f"        o{k}[t] = {x}" for k, x in enumerate(code.outputs)]
-    src += ["        first = False",
-            f"    return ({''.join(f'o{k}, ' for k in range(len(code.outputs)))})"]
+    src += [f"        o{k}[t] = {x}\n        ko{k}[t] = {code.knowns.get(x, 'True')}"
+            for k, x in enumerate(code.outputs)]
+    src += ["        first = False", f"    return ({''.join(f'{x}, ' for x in outs)})"]
     space: dict[str, Any] = {"_div": _div, "_mod": _mod, "_pow": _pow}
     exec(compile("\n".join(src), "<fretc streams>", "exec"), space)
     return space["run"]
 
 
-def stream_columns(system: StreamSystem, values: Mapping[str, np.ndarray],
-                   n: int) -> dict[str, np.ndarray]:
+def stream_columns(system: StreamSystem, values: Mapping[str, np.ndarray], n: int,
+                   unknown: Mapping[str, np.ndarray] | None = None,
+                   nan_unknown: bool = True) -> dict[str, np.ndarray]:
     """Each variable of ``system`` over ``n`` ticks (a ``bool`` column for a truth value,
     else ``float64``), from its inputs' columns ``values`` (at least ``n`` values each;
     numbers read as doubles).
 
+    With ``unknown`` (variable -> bool array over the ticks, where its value is unknown;
+    absent: known everywhere), also ``name + "?"`` per variable: where its value is
+    unknown, by Kleene's logic over the tick's definition (a value held through ``pre``
+    is as known as when it was read; with ``nan_unknown``, an input or a comparison that
+    reads NaN is unknown: fretc's NaN rule).
+
     Raises:
         KeyError: an input without a column."""
-    cols = []
+    args: list[list] = []
     for name in system.inputs:
         c = np.asarray(values[name])[:n]
-        cols.append(c.tolist() if c.dtype == np.bool_ else c.astype(np.float64).tolist())
-    got = _runner(system)(n, *cols)
-    return {name: np.array(col, dtype=np.bool_ if b else np.float64)
-            for name, b, col in zip(system.names, system.booleans, got)}
+        floats = c.dtype != np.bool_
+        col = c.astype(np.float64) if floats else c
+        bad = np.zeros(n, np.bool_)
+        if unknown is not None and name in unknown:
+            bad |= np.asarray(unknown[name][:n], dtype=np.bool_)
+        if nan_unknown and floats:
+            bad |= np.isnan(col)
+        args += [col.tolist(), (~bad).tolist()]
+    got = _runner(system)(n, nan_unknown, *args)
+    m = len(system.names)
+    out = {name: np.array(col, dtype=np.bool_ if b else np.float64)
+           for name, b, col in zip(system.names, system.booleans, got[:m])}
+    if unknown is not None:
+        out.update({f"{name}?": ~np.array(k, dtype=np.bool_)
+                    for name, k in zip(system.names, got[m:])})
+    return out

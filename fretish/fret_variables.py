@@ -18,8 +18,10 @@ shield``, ``fretc testgen``; :func:`with_fret_definitions`): a literal (FRET's c
 (``roll_hold`` is ``autopilot_engaged and not hdg_hold``, ``0.0 -> pre xin``) its FRETish
 reading with the Internal variables it reads expanded (:mod:`fretc.fretish.lustre`,
 :mod:`fretc.fretish.fret_definitions`); the formulas fretc emits keep the variable's name,
-as FRET's ft and pt do. What it does not take (a definition that reads itself through
-``pre`` or is outside the subset: a free variable; a Mode's requirement; an integer type,
+as FRET's ft and pt do. A definition that reads itself through ``pre`` (a stream with
+state) is computed tick by tick by the audit and the runtime monitors (``streams``:
+:mod:`fretc.fretish.fret_streams`). What it does not take (such a stream in the analyses,
+a definition outside the subset: a free variable; a Mode's requirement; an integer type,
 the numbers being reals) is named by :func:`unused`, never silently dropped.
 """
 

@@ -16,7 +16,9 @@ same meaning:
   first time point of the trace (a Lustre node's first instant);
 - ``pre e`` (``e`` one tick earlier) is ``preBool(false, e)`` for a boolean ``e`` and
   ``preReal(0, e)`` for a number: FRET's functions of the previous value, whose value at
-  the first tick Lustre leaves undefined (``nil``) and a definition guards with ``->``.
+  the first tick Lustre leaves undefined (``nil``) and a definition guards with ``->``; a
+  definition that reads itself through ``pre`` is a stream with state, computed tick by
+  tick where fretc computes it (:mod:`fretc.fretish.fret_streams`).
 
 Precedence (Lustre V6's, lowest first): ``if``, ``->`` (right), ``=>`` (right), ``or``
 ``xor``, ``and``, comparisons, ``not``, ``+ -``, ``* / mod``, unary ``-`` and ``pre``.

@@ -138,18 +138,30 @@ def test_unknown_inputs_never_decide_otherwise(tmp_path_factory, rows, data):
     assert got == audit(tmp, export(True), rows, names, unknown, whole=True)[0]
     truth, _out = audit(tmp, export(False), with_reference(rows),
                         names + ["psiAtZero", "rollAtZero"])
+    holds = {"satisfied": "holds", "vacuous": "holds"}  # (a trigger an unknown cell hides
+    # may make the judge's vacuity differ: docs/guide/audits.md, damaged logs)
     for (rid, verdict, tick), (_r, want, want_tick) in zip(got, truth):
-        assert verdict in ("unknown", want), (rid, verdict, want)
+        assert verdict == "unknown" or holds.get(verdict, verdict) == holds.get(want, want), \
+            (rid, verdict, want)
         if verdict == "violated":
             assert tick == want_tick
 
 
-def test_a_nan_input_makes_it_unknown_from_there_on(tmp_path):
-    rows = [{"Psi": x, "hdg": h, "autopilot_engaged": False, "roll_angle": 0.0,
-             "roll_cmd": 0.0, "HDGmodeCmd": 0.0}
-            for x, h in ((0.0, False), (3.0, True), (math.nan, True), (9.0, False))]
-    got, _out = audit(tmp_path, export(True), rows, [n for n, _t in INPUTS])
+def test_a_nan_input_is_unknown_where_the_stream_holds_it(tmp_path):
+    """A NaN read at a reset is held (psiAtZero unknown until the next reset), one read
+    where the stream holds an earlier value is not."""
+    def rows(psi, hdg):
+        return [{"Psi": x, "hdg": h, "autopilot_engaged": False, "roll_angle": 0.0,
+                 "roll_cmd": 0.0, "HDGmodeCmd": 0.0} for x, h in zip(psi, hdg)]
+
+    names = [n for n, _t in INPUTS]
+    held = rows((0.0, math.nan, 4.0, 9.0, 9.0), (False, True, True, False, True))
+    got, _out = audit(tmp_path, export(True), held, names)
     assert dict((i, v) for i, v, _t in got)["P1"] == "unknown"
+    # (read at a tick the stream holds 3: tick 3's 9 - 3 > 5 is a violation all the same)
+    passed = rows((0.0, 3.0, math.nan, 9.0), (False, True, True, False))
+    got, _out = audit(tmp_path, export(True), passed, names)
+    assert ("P1", "violated", 3) in got
 
 
 def test_bound_by_a_column_of_its_own_it_is_still_computed(tmp_path):

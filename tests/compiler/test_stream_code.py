@@ -116,3 +116,46 @@ def test_columns_equal_the_lustre_loop(case, data):
     want = ref(values)
     for name in system.names:
         assert got[name].tolist() == want[name], name
+
+
+def _three(system, values: dict, unknown: dict, n: int) -> dict:
+    cols = {k: np.array(v, dtype=np.bool_ if isinstance(v[0], bool) else np.float64)
+            for k, v in values.items()}
+    return stream_columns(system, cols, n, {k: np.array(v, dtype=np.bool_)
+                                            for k, v in unknown.items()})
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.sampled_from([(LMCPS, ref_lmcps), (MUTUAL, ref_mutual), (NESTED, ref_nested)]),
+       st.data())
+def test_a_known_value_is_the_same_whatever_the_unknown_inputs_were(case, data):
+    """Kleene's reading of the unknown inputs (stream_columns with ``unknown``): where a
+    value is known, every way of filling the unknown inputs gives it (a few drawn here,
+    through the reference loop)."""
+    variables, ref = case
+    system = stream_system(variables, definitions(variables).streams)
+    assert system is not None
+    values = _inputs(data, system)
+    n = len(next(iter(values.values())))
+    unknown = {k: data.draw(st.lists(st.booleans(), min_size=n, max_size=n))
+               for k in values}
+    got = _three(system, values, unknown, n)
+    for _ in range(4):
+        filled = {k: [data.draw(st.booleans() if isinstance(x, bool) else st.sampled_from(
+            [-2.0, 0.0, 1.5, 7.0])) if unknown[k][t] else x for t, x in enumerate(v)]
+            for k, v in values.items()}
+        other = ref(filled)
+        for name in system.names:
+            for t in range(n):
+                if not got[f"{name}?"][t]:
+                    assert got[name][t] == other[name][t], (name, t)
+
+
+def test_a_reset_makes_it_known_again():
+    system = stream_system(LMCPS, ["psiAtZero"])
+    values = {"Psi": [0.0, 3.0, 7.0, 9.0, 9.0], "hdg": [False, True, True, False, True]}
+    got = _three(system, values, {"Psi": [False, True, False, False, False]}, 5)
+    assert got["psiAtZero?"].tolist() == [False, True, True, True, False]
+    assert got["psiAtZero"][4] == 9.0
+    nan = _three(system, dict(values, Psi=[0.0, float("nan"), 7.0, 9.0, 9.0]), {}, 5)
+    assert nan["psiAtZero?"].tolist() == [False, True, True, True, False]
