@@ -203,3 +203,35 @@ def test_a_sampled_trace_audited_back_gives_the_same_verdicts(tmp_path_factory, 
     assert verdicts[0] == verdicts[1]
     header = (tmp / "w" / "t.csv").read_text(encoding="utf-8").splitlines()
     assert not any("psiAtZero" in line for line in header if line.startswith("time"))
+
+
+def test_alone_in_a_set_and_in_parallel_the_same(tmp_path):
+    """Each requirement audited alone gives its verdict in the set; ``-j 2`` over two logs
+    gives each the verdicts of the log audited by itself."""
+    import random
+
+    rnd = random.Random(7)
+    rows = [{"Psi": rnd.choice([0.0, 2.0, 6.0, 9.0]), "hdg": rnd.random() < 0.4,
+             "autopilot_engaged": rnd.random() < 0.6, "roll_angle": rnd.choice([0.0, 3.0]),
+             "roll_cmd": rnd.choice([1.0, 5.0]), "HDGmodeCmd": rnd.choice([4.0, 8.0])}
+            for _ in range(40)]
+    names = [n for n, _t in INPUTS]
+    whole, _out = audit(tmp_path, export(True), rows, names)
+    assert "violated" in {v for _i, v, _t in whole}
+    for k, (rid, _text) in enumerate(REQUIREMENTS):
+        alone = export(True)
+        alone["requirements"] = [alone["requirements"][k]]
+        got, _out = audit(tmp_path, alone, rows, names)
+        assert got == [whole[k]], rid
+    (tmp_path / "p.json").write_text(json.dumps(export(True)), encoding="utf-8")
+    (tmp_path / "t2.csv").write_bytes((tmp_path / "t.csv").read_bytes())
+    got = CliRunner().invoke(main, ["audit", "-r", str(tmp_path / "p.json"),
+                                    str(tmp_path / "t.csv"), str(tmp_path / "t2.csv"), "-j",
+                                    "2", "--tick-period", "100ms", "--no-progress", "--json",
+                                    str(tmp_path / "j.json")])
+    res = json.loads((tmp_path / "j.json").read_text(encoding="utf-8"))
+    assert got.exit_code in (0, 1), got.output
+    for log in res["logs"]:
+        assert [(v["requirement"], v["verdict"],
+                 (v.get("first_violation") or {}).get("tick")) for v in log["verdicts"]] \
+            == whole
