@@ -235,3 +235,22 @@ def test_alone_in_a_set_and_in_parallel_the_same(tmp_path):
         assert [(v["requirement"], v["verdict"],
                  (v.get("first_violation") or {}).get("tick")) for v in log["verdicts"]] \
             == whole
+
+
+def test_per_entity_it_is_an_error_saying_why(tmp_path):
+    """A requirement judged per entity (its stream reads a ``$motor`` variable) is an
+    error naming the stream: the per-entity audit does not compute it."""
+    from fretc.audit import AuditConfig, load_plan
+
+    (tmp_path / "p.json").write_text(json.dumps(export(True)), encoding="utf-8")
+    (tmp_path / "b.bindings.toml").write_text(
+        '[tick]\nperiod = "100 ms"\n[entities]\n'
+        'motor = { key = "/diagnostics.status[:].name", matching = "motor*" }\n'
+        "[variables]\n"
+        "Psi = 'max(/diagnostics.status[:]{name==$motor}.level)'\n"
+        "hdg = 'max(/diagnostics.status[:]{name==\"battery\"}.level) < 2'\n",
+        encoding="utf-8")
+    plan = load_plan(AuditConfig(requirements=(str(tmp_path / "p.json"),),
+                                 bindings=(str(tmp_path / "b.bindings.toml"),)))
+    p1 = next(r for r in plan.requirements if r.id == "P1")
+    assert p1.error is not None and "psiAtZero, which FRET defines as a stream" in p1.error
