@@ -254,3 +254,41 @@ def test_per_entity_it_is_an_error_saying_why(tmp_path):
                                  bindings=(str(tmp_path / "b.bindings.toml"),)))
     p1 = next(r for r in plan.requirements if r.id == "P1")
     assert p1.error is not None and "psiAtZero, which FRET defines as a stream" in p1.error
+
+
+def test_the_lmcps_export(tmp_path):
+    """FRET's LMCPS export itself (its requirements that read psiAtZero and rollAtZero, its
+    glossary as exported): the verdicts over a random trace equal those of the same export
+    with the two variables made Inputs, fed the reference's columns."""
+    from pathlib import Path
+
+    lmcps = Path(__file__).resolve().parents[3] / "shared/corpora/fret_projects/LMCPS/" \
+        "LM_requirements.json"
+    if not lmcps.is_file():
+        import pytest
+
+        pytest.skip("the LMCPS export (../shared/corpora/fret_projects/LMCPS) is absent")
+    import random
+
+    doc = json.loads(lmcps.read_text(encoding="utf-8"))
+    doc["requirements"] = [r for r in doc["requirements"]
+                           if r["reqid"] in ("AP-010bv2", "AP-010b", "AP-004b")]
+    assert len(doc["requirements"]) == 3
+    freed = json.loads(json.dumps(doc))
+    for v in freed["variables"]:
+        if v.get("variable_name") in ("psiAtZero", "rollAtZero"):
+            v["idType"], v["assignment"] = "Input", ""
+    rnd = random.Random(3)
+    rows = [{"Psi": rnd.choice([0.0, 1.0, 1.05, 5.0]), "hdg": rnd.random() < 0.5,
+             "autopilot_engaged": rnd.random() < 0.7, "roll_angle": rnd.choice([0.0, 2.0]),
+             "roll_cmd": rnd.choice([1.0, 2.1]), "HDGmodeCmd": rnd.choice([3.0, 6.0])}
+            for _ in range(30)]
+    names = [n for n, _t in INPUTS]
+    got, out = audit(tmp_path, doc, rows, names)
+    want, _out = audit(tmp_path, freed, with_reference(rows),
+                       names + ["psiAtZero", "rollAtZero"])
+    assert got == want
+    assert {v for _i, v, _t in got} <= {"satisfied", "vacuous", "violated"}
+    assert "violated" in {v for _i, v, _t in got}
+    assert "rollAtZero: FRET's definition of this Internal variable computed tick by tick" \
+        in out
