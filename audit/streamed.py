@@ -110,6 +110,9 @@ class _Streams:
     ltl3: Ltl3Stream | None
     #: why the requirement is judged whole after all (None: the streams decide it)
     gave_up: str | None = None
+    #: after it gave up for a NaN: the first and last ticks a comparison of it reads NaN at
+    #: (where the three-valued streams' completions start and end, audit/streamed_three.py)
+    nan_range: tuple[int, int] | None = None
 
 
 def unstreamed_reason(plan: AuditPlan, r: RequirementPlan) -> str | None:
@@ -170,6 +173,9 @@ class CsvStreams:
     results: dict[int, StreamedResult] = field(default_factory=dict)
     #: requirement index -> why it is judged whole after all (after :meth:`close`)
     whole: dict[int, str] = field(default_factory=dict)
+    #: requirement index -> the first and last ticks a comparison of it reads NaN at, for
+    #: those given up for a NaN (after :meth:`close`)
+    nan_ranges: dict[int, tuple[int, int]] = field(default_factory=dict)
 
     @classmethod
     def of(cls, plan: AuditPlan, candidates: Iterable[RequirementPlan]) -> CsvStreams:
@@ -205,7 +211,9 @@ class CsvStreams:
         self.n = first + k
         for s in self.streams:
             if s.gave_up is None:
-                _feed(s, columns, k, times)
+                _feed(s, columns, k, times, first)
+            elif s.gave_up == NAN_REASON:
+                _nan_range(s, columns, k, first)
 
     def close(self, source: CsvSource) -> None:
         """After the read: the results of the streams, or why a requirement is judged
@@ -221,6 +229,8 @@ class CsvStreams:
                 why = "no row"
             if why is not None:
                 self.whole[i] = why
+                if s.nan_range is not None:
+                    self.nan_ranges[i] = s.nan_range
                 continue
             assert self.last_time is not None  # (n rows)
             ev, times = s.interval.finish()
@@ -231,10 +241,11 @@ class CsvStreams:
         self.streams = []
 
 
-def _feed(s: _Streams, columns: Mapping[str, np.ndarray], k: int, times: np.ndarray
-          ) -> None:
-    """Feed one chunk of ``k`` rows to the streams of ``s``; a chunk where a comparison
-    reads NaN (unknown ticks: the three-valued judge's) or a column is missing gives up."""
+def _feed(s: _Streams, columns: Mapping[str, np.ndarray], k: int, times: np.ndarray,
+          first: int) -> None:
+    """Feed one chunk of ``k`` rows (the trace's rows ``first ..``) to the streams of ``s``;
+    a chunk where a comparison reads NaN (unknown ticks: the three-valued judge's) or a
+    column is missing gives up."""
     try:
         cols = {n: columns[n] for n in s.names}
     except KeyError as exc:
@@ -243,11 +254,20 @@ def _feed(s: _Streams, columns: Mapping[str, np.ndarray], k: int, times: np.ndar
     if nan_ticks_of(s.exprs, cols, k).any():
         s.gave_up = NAN_REASON
         s.interval = s.rob = s.ltl3 = None  # type: ignore[assignment]  # (their memory freed)
+        _nan_range(s, columns, k, first)
         return
     s.interval.feed(cols, k, times)
     s.rob.feed(cols, k, times)
     if s.ltl3 is not None:
         s.ltl3.feed(cols, k, times)
+
+
+def _nan_range(s: _Streams, columns: Mapping[str, np.ndarray], k: int, first: int) -> None:
+    """Widen ``s.nan_range`` by the chunk's ticks at which a comparison of ``s`` reads NaN."""
+    at = np.flatnonzero(nan_ticks_of(s.exprs, {n: columns[n] for n in s.names}, k))
+    if len(at):
+        lo = s.nan_range[0] if s.nan_range is not None else first + int(at[0])
+        s.nan_range = (lo, first + int(at[-1]))
 
 
 def values_around(path: str, period_ns: int, types: Mapping[str, str],

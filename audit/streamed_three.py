@@ -23,9 +23,13 @@ the counterpart of one part of the three-valued judge:
 * the NaN ticks (how many, the first and the last: the ``nan`` data problem) and the ticks
   it reads unknown (the NaN ticks and the ``unknown`` cells, whose rows the first read
   listed: the verdict's unknown ticks and the reason of an unknown verdict);
-* where Kleene's reading is open at the last tick, one more read follows every completion of
-  the unknown ticks (:class:`fretc.monitors.completions_stream.CompletionsStream`, equal to
-  :func:`fretc.monitors.completions.completed_verdict`, with its bounds and their reason).
+* every completion of the unknown ticks, for where Kleene's reading is open at the last tick
+  (:class:`fretc.monitors.completions_stream.CompletionsStream`, equal to
+  :func:`fretc.monitors.completions.completed_verdict`, with its bounds and their reason):
+  followed in the same read from the first to the last tick the first read found unknown
+  (the NaN ticks it saw, the ``unknown`` cells' rows), and kept when those are the ticks
+  where a leaf of the pt formula is unknown (Kleene's stream finds them); otherwise, or past
+  :data:`CONCURRENT_STATES` states after the last, followed in one more read.
 
 The verdict is then set by :func:`finalize_three` as :func:`fretc.audit.finalize.finalize`
 sets it after :func:`~fretc.audit.unknown_ticks.judge_three`: the audit JSON is the same
@@ -37,8 +41,8 @@ earlier ticks (the completions' program), more than
 ``gap`` or ``cut`` rows (judged whole as before). Memory: per requirement the streams'
 state (as :mod:`fretc.audit.streamed`'s, the runs of unknown ticks, at most
 :data:`fretc.monitors.completions.MAX_STATES` states of the completions), and the rows of the
-trace's ``unknown`` cells. CPU: one read of the trace more, two where the completions are
-followed.
+trace's ``unknown`` cells. CPU: one read of the trace more (two where the completions could
+not be followed beside the other streams).
 """
 
 from __future__ import annotations
@@ -70,7 +74,12 @@ if TYPE_CHECKING:
     from fretc.audit.model import AuditPlan, RequirementPlan
     from fretc.audit.verdict import LogAudit, Verdict
 
-__all__ = ["ThreeResult", "ThreeStreams", "finalize_three", "judged_three"]
+__all__ = ["ThreeResult", "ThreeStreams", "finalize_three", "judged_three",
+           "CONCURRENT_STATES"]
+
+#: The most completions followed in the three-valued streams' own read: past it they are
+#: followed, where Kleene's reading leaves the verdict open, in one more read alone
+CONCURRENT_STATES = 16
 
 
 @dataclass
@@ -128,6 +137,12 @@ class _Three:
     cells: bool = False  # (some unknown cell read)
     nan_only: bool = False  # (some NaN tick without an unknown cell)
     gave_up: str | None = None
+    #: the completions followed in the same read, from the first to the last tick the first
+    #: read found unknown (``range``), kept when Kleene's reading is open there; ``outgrew``
+    #: their bound's message (:class:`fretc.monitors.completions.TooManyStates`)
+    completions: CompletionsStream | None = None
+    range: tuple[int, int] | None = None
+    outgrew: str = ""
 
 
 def _three_of(r: RequirementPlan) -> _Three | str:
@@ -210,6 +225,10 @@ class ThreeStreams:
                                 if s.definite.too_many else None)
             if why is None and lo != hi:
                 why = completions_unsupported(s.r.formalization.pt)  # type: ignore[union-attr]
+            settled = None
+            if why is None and lo != hi and s.completions is not None \
+                    and s.kleene.free == s.range:  # (the same search as one more read)
+                settled = (None, s.outgrew) if s.outgrew else (s.completions.finish(), "")
             if why is None and s.unknown[0] and self.last_time is not None:
                 ev, times = s.definite.finish()
                 ltl3 = s.ltl3.finish() if s.ltl3 is not None else ("unknown", None, None)
@@ -225,7 +244,9 @@ class ThreeStreams:
                                                s.nan[4]), self.n, self.last_time,
                                               (s.unknown[0], s.unknown[1], s.unknown[2]),
                                               what, {c: self.unknown_rows[c] for c in marked})
-                if lo != hi:  # (open: every completion followed, another read)
+                if settled is not None:
+                    _settle(self.results[i], *settled)
+                elif lo != hi:  # (open: every completion followed, another read)
                     self.open[i] = (s.r, s.kleene.free)
             else:
                 self.whole[i] = why or "no NaN tick read"
@@ -272,6 +293,13 @@ def _feed(s: _Three, columns: Mapping[str, np.ndarray], k: int, times: np.ndarra
             s.unknown[1], s.unknown[2] = first + int(at[0]), int(times[at[0]])
         s.unknown[0] += len(at)
     s.kleene.feed(cols, unknown, k)
+    if s.completions is not None and not s.outgrew:
+        try:
+            s.completions.feed(cols, unknown, k)
+        except TooManyStates as exc:
+            s.outgrew = str(exc)
+        if len(s.completions.carries or ()) > CONCURRENT_STATES:
+            s.completions = None  # (too many completions to follow beside the others)
     s.definite.feed(cols, unknown, k, times)
     if s.ltl3 is not None:
         s.ltl3.feed(cols, unknown, k, times)
@@ -293,6 +321,16 @@ def judged_three(plan: AuditPlan, streams: CsvStreams, source: CsvSource) -> Non
         return
     three.unknown_rows = {c: np.asarray(sorted(rows), np.int64)
                           for c, rows in source.unknown_rows.items() if c in three.names}
+    for s in three.streams:  # (the completions beside them, from the first read's ticks)
+        ends = list(streams.nan_ranges.get(s.r.index, ()))
+        for c in s.names:
+            rows = three.unknown_rows.get(c)
+            if rows is not None and len(rows):
+                ends += [int(rows[0]), int(rows[-1])]
+        pt = s.r.formalization.pt  # type: ignore[union-attr]  # (streamed: formalized)
+        if ends and completions_unsupported(pt) is None:
+            s.range = (min(ends), max(ends))
+            s.completions = CompletionsStream(pt, *s.range, streams.n)
     CsvSource(str(source.path), period_ns=source.period_ns, keep=(), sink=three,
               streamed=three.names, keep_times=False, extent=source.extent)
     three.close()
@@ -338,12 +376,14 @@ def _completions(source: CsvSource, three: ThreeStreams) -> None:
     CsvSource(str(source.path), period_ns=source.period_ns, keep=(), sink=sink,
               streamed=names, keep_times=False, extent=source.extent)
     for i, (_r, run) in runs.items():
-        got = three.results[i]
-        if i in failed:
-            got.holds, got.outgrew = None, failed[i]
-        else:
-            got.holds = run.finish()
-            got.completed = got.holds is not None
+        _settle(three.results[i], *((None, failed[i]) if i in failed else (run.finish(), "")))
+
+
+def _settle(got: ThreeResult, holds: bool | None, outgrew: str) -> None:
+    """``got``'s verdict from its completions: ``holds`` their verdict (None: they differ,
+    or ``outgrew``, the bound's message, stopped them)."""
+    got.holds, got.outgrew = holds, outgrew
+    got.completed = holds is not None
 
 
 def finalize_three(plan: AuditPlan, r: RequirementPlan, got: ThreeResult, v: Verdict,

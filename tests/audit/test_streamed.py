@@ -31,6 +31,7 @@ from test_metamorphic import ALL, SAMPLE, _case
 
 import fretc.audit.log as audit_log_module
 import fretc.audit.streamed as streamed
+import fretc.audit.streamed_three as streamed_three
 import fretc.logs.csv.read as csv_read
 import fretc.monitors.robustness as robustness
 from fretc.audit import AuditConfig, audit_log, load_plan
@@ -164,17 +165,29 @@ def test_the_streamed_audit_is_the_whole_trace_audit_long(tmp_path_factory, n, t
     check_trace(tmp_path_factory, n, timed, marks, rows, chunk, rnd)
 
 
+@settings(max_examples=25, deadline=None)
+@given(st.integers(1, 60), st.booleans(), st.sampled_from(["nan", "unknown", "both"]),
+       st.integers(1, 7), st.integers(3, 9), st.randoms(use_true_random=False))
+def test_completions_followed_in_a_read_of_their_own(tmp_path_factory, n, timed, marks, rows,
+                                                     chunk, rnd):
+    """Where the completions are not followed beside the three-valued streams (more states
+    than CONCURRENT_STATES: here every time), one more read follows them: the same JSON."""
+    check_trace(tmp_path_factory, n, timed, marks, rows, chunk, rnd,
+                {(streamed_three, "CONCURRENT_STATES"): 0})
+
+
 def check_trace(tmp_path_factory, n: int, timed: bool, marks: str, rows: int, chunk: int,
-                rnd: random.Random) -> None:
+                rnd: random.Random, more: dict | None = None) -> None:
     """The relation on one random trace, read ``rows`` rows and its robustness evaluated
-    ``chunk`` ticks at a time."""
+    ``chunk`` ticks at a time (``more``: other module constants patched)."""
     folder = tmp_path_factory.getbasetemp() / "streamed_plan"
     folder.mkdir(exist_ok=True)
     plan = _plan(str(folder))
     path = tmp_path_factory.mktemp("t") / "trace.csv"
     path.write_text(_trace(rnd, n, timed, marks), encoding="utf-8")
     got, whole, decided = _both(plan, str(path), {(csv_read, "CHUNK_ROWS"): rows,
-                                                  (robustness, "ROBUSTNESS_CHUNK"): chunk})
+                                                  (robustness, "ROBUSTNESS_CHUNK"): chunk,
+                                                  **(more or {})})
     assert got == whole
     streamed_ids = _ids(plan, decided["results"])
     assert not streamed_ids & WHOLE
