@@ -113,3 +113,62 @@ def test_the_lmcps_export(tmp_path):
     assert built.returncode == 0, built.stderr[-4000:]
     assert not any(q in built.stderr for q in ("stream", "'q_", "\u2018q_"))
     assert subprocess.run([str(tmp_path / "runner")], capture_output=True).returncode != 0
+
+
+#: boolean streams, nested pre, streams reading each other, / and mod (the C helpers)
+MIXED = {
+    "requirements": [
+        {"reqid": "S1", "fulltext": "whenever seen c shall immediately satisfy half <= y + 3"},
+        {"reqid": "S2", "fulltext": "c shall always satisfy big | d > 1"}],
+    "variables": [
+        {"component_name": "c", "variable_name": "x", "idType": "Input",
+         "dataType": "boolean"},
+        {"component_name": "c", "variable_name": "y", "idType": "Input", "dataType": "double"},
+        {"component_name": "c", "variable_name": "d", "idType": "Internal", "dataType": "",
+         "assignment": "y -> pre (pre d) + 1.0"},
+        {"component_name": "c", "variable_name": "seen", "idType": "Internal",
+         "dataType": "boolean", "assignment": "x -> (x or pre seen)"},
+        {"component_name": "c", "variable_name": "half", "idType": "Internal",
+         "dataType": "", "assignment": "if seen then d / 2.0 else d mod 2.0"},
+        {"component_name": "c", "variable_name": "a", "idType": "Internal",
+         "dataType": "boolean", "assignment": "false -> pre b"},
+        {"component_name": "c", "variable_name": "b", "idType": "Internal",
+         "dataType": "boolean", "assignment": "x and not a"},
+        {"component_name": "c", "variable_name": "big", "idType": "Internal",
+         "dataType": "boolean", "assignment": "a or y > 2.0"}]}
+
+
+@pytest.fixture(scope="module")
+def mixed(tmp_path_factory):
+    needs_cc()
+    tmp = tmp_path_factory.mktemp("mixed")
+    (tmp / "m.json").write_text(json.dumps(MIXED), encoding="utf-8")
+    entries, _notes = fret_declarations(load_requirements([tmp / "m.json"]), streams=True)
+    compiled = compile_entries(entries)
+    files, skipped = emit_c(compiled)
+    assert not skipped
+    units = c_units(compiled)
+    write(files, tmp)
+    (tmp / "driver.c").write_text(driver_source(units), encoding="utf-8")
+    exe = build(tmp, [f for f in files if f.endswith(".c") and f != "runner.c"]
+                + ["driver.c"], "driver")
+    py = load_source(build_monitor_module(compiled, "mixed").text)
+    return exe, [m for u in units for m in u.monitors], py
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.lists(st.fixed_dictionaries({"x": st.booleans(), "y": st.sampled_from(
+    [-2.0, 0.0, 1.5, 3.0, 7.0])}), min_size=1, max_size=12))
+def test_the_c_monitor_steps_as_the_python_one(mixed, rows):
+    """Boolean streams, nested ``pre``, streams reading each other, ``/`` and ``mod``: the
+    C monitor and the Python one (itself against the reference loops:
+    tests/compiler/test_stream_code.py) step alike."""
+    exe, monitors, py = mixed
+    assert sorted(x.raw_name for x in monitors[0].inputs) == ["x", "y"]
+    for m, got in zip(monitors, run_driver(exe, [(k, m, rows)
+                                                for k, m in enumerate(monitors)])):
+        ticks, fin = _python(py.MONITORS[m.id], rows)
+        u = got["unread"] if got["unread"] >= 0 else len(rows)
+        assert got["ticks"][:u] == ticks[:u], m.id
+        if got["unread"] < 0:
+            assert got["finish"] == fin, m.id
