@@ -115,6 +115,7 @@ def _with_definitions(entries: list, bindings: Bindings | None, notes: list[str]
     ``streams``, its column computed tick by tick from the columns of the variables it
     reads (:mod:`fretc.audit.streams`), named once in ``notes`` too."""
     from fretc.fretish.fret_definitions import definitions
+    from fretc.fretish.fret_streams import stream_why
     from fretc.fretish.fret_variables import names_read, with_fret_definitions
 
     bound = set(bindings.variables) | set(bindings.per_entity) if bindings is not None \
@@ -133,8 +134,8 @@ def _with_definitions(entries: list, bindings: Bindings | None, notes: list[str]
                     for n in used]
         if e.streams is not None:
             computed += [(n, "computed tick by tick from the variables it reads (a stream "
-                          "with state: it reads itself through pre; no binding of its own)")
-                         for n in e.streams.names]
+                          f"with state: {stream_why(defs.free.get(n, ''))}; no binding of "
+                          "its own)") for n in e.streams.names]
         for n, how in sorted(computed):
             if n not in said:
                 said.add(n)

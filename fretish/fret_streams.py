@@ -32,15 +32,25 @@ from typing import Any
 from fretc.fretish import ast as A
 from fretc.fretish.fret_definitions import definitions, substitute
 
-__all__ = ["StreamSystem", "stream_system", "STREAM_NOTE", "FIRST_TICK", "is_boolean"]
+__all__ = ["StreamSystem", "stream_system", "STREAM_NOTE", "stream_why", "FIRST_TICK",
+           "is_boolean"]
 
 #: FRET's first time point (``a -> b``'s first tick), a variable of no glossary
 FIRST_TICK = "FTP"
 
 #: what the notes say of a stream variable computed (after "FRET defines it (Internal) as
-#: ...;")
-STREAM_NOTE = ("a stream with state (it reads itself through pre): computed tick by tick "
-               "from the variables it reads, as Lustre defines it")
+#: ...; that definition is"), ``{why}`` :func:`stream_why`'s clause
+STREAM_NOTE = ("a stream with state ({why}): computed tick by tick from the variables it "
+               "reads, as Lustre defines it")
+
+
+def stream_why(free_reason: str) -> str:
+    """Why a stream variable is one, from the reason the analyses keep it free
+    (:class:`fretc.fretish.fret_definitions.Definitions`' ``free``): it reads itself
+    through ``pre`` (alone or round a cycle of definitions), or it reads such a variable."""
+    if free_reason.startswith("its definition reads itself"):
+        return "it reads itself through pre"
+    return "it reads a variable that reads itself through pre"
 
 
 @dataclass(frozen=True)

@@ -35,7 +35,7 @@ from typing import Any
 from fretc.common.errors import FretishFileError
 from fretc.fretish import ast as A
 from fretc.fretish.fret_definitions import constant_of, definitions, substitute
-from fretc.fretish.fret_streams import STREAM_NOTE, stream_system
+from fretc.fretish.fret_streams import STREAM_NOTE, stream_system, stream_why
 
 __all__ = ["FretVariable", "fret_variables", "declare", "unused", "INTEGER_TYPES",
            "with_fret_definitions", "constant_of", "names_read", "fret_declarations"]
@@ -197,7 +197,9 @@ def unused(variables: list[FretVariable] | tuple[FretVariable, ...], read: set[s
                        f"that {what} {use}")
         elif v.kind == "Internal" and streams and v.name in defs.streams:
             out.append(f"{v.name}: FRET defines it (Internal) as {_short(v.assignment)}; "
-                       f"that definition is {STREAM_NOTE}, {use}")
+                       "that definition is "
+                       + STREAM_NOTE.format(why=stream_why(defs.free.get(v.name, "")))
+                       + f", {use}")
         elif v.kind == "Internal" and v.assignment.strip():
             out.append(f"{v.name}: FRET defines it (Internal) as {_short(v.assignment)}; "
                        f"fretc reads it as a free variable: {defs.free.get(v.name, '')}")

@@ -111,3 +111,25 @@ def test_the_lmcps_export(tmp_path):
         assert not {"psiAtZero", "rollAtZero"} & set(monitors[rid].VARIABLES), rid
     assert "psiAtZero: FRET defines it (Internal) as" in got.stderr
     assert "that definition is a stream with state" in got.stderr
+
+
+def test_the_notes_say_why_each_is_a_stream(tmp_path):
+    doc = {"requirements": [{"reqid": "R1", "fulltext": "c shall always satisfy big"}],
+           "variables": [
+               {"component_name": "c", "variable_name": "x", "idType": "Input",
+                "dataType": "boolean"},
+               {"component_name": "c", "variable_name": "a", "idType": "Internal",
+                "dataType": "boolean", "assignment": "false -> pre b"},
+               {"component_name": "c", "variable_name": "b", "idType": "Internal",
+                "dataType": "boolean", "assignment": "x and not a"},
+               {"component_name": "c", "variable_name": "big", "idType": "Internal",
+                "dataType": "boolean", "assignment": "a or x"}]}
+    (tmp_path / "p.json").write_text(json.dumps(doc), encoding="utf-8")
+    got = CliRunner().invoke(main, [str(tmp_path / "p.json"), "--emit", "monitor", "-o",
+                                    str(tmp_path / "m.py")])
+    assert got.exit_code == 0, got.output
+    assert runpy.run_path(str(tmp_path / "m.py"))["MONITORS"]["R1"].VARIABLES == ("x",)
+    assert "big: FRET defines it (Internal) as a or x; that definition is a stream with " \
+           "state (it reads a variable that reads itself through pre)" in got.stderr
+    assert "a: FRET defines it (Internal) as false -> pre b; that definition is a stream " \
+           "with state (it reads itself through pre)" in got.stderr
