@@ -338,7 +338,8 @@ class _LogRun:
                          else f"the CSV columns ({', '.join(source.columns)})")  # type: ignore[attr-defined]
                 hints = [(m, closest(m, sorted(available))) for m in missing if "(" not in m]
                 hint = "; ".join([f"did you mean {h!r} for {m!r}?" for m, h in hints if h]
-                                 + [call_hint(m) for m in missing if "(" in m])
+                                 + [call_hint(m) for m in missing if "(" in m]
+                                 + _stream_hint(r, missing))
                 self.verdicts[r.index].error = (f"no binding for {', '.join(map(repr, missing))}"
                                                 f" in {where}" + (f"; {hint}" if hint else ""))
 
@@ -560,6 +561,18 @@ class _LogRun:
         if not la.gaps:
             return "the log is damaged: its messages may be in what could not be read"
         return None
+
+
+def _stream_hint(r: RequirementPlan, missing: list[str]) -> list[str]:
+    """Why ``r`` reads the ``missing`` variables its text does not name: the FRET
+    definitions of stream variables read them (:mod:`fretc.audit.streams`); none else."""
+    system = r.streams
+    via = [m for m in missing if system is not None and m in system.inputs]
+    if not via:
+        return []
+    return [f"{', '.join(map(repr, via))} {'is' if len(via) == 1 else 'are'} read by FRET's "
+            f"definition of {', '.join(system.names)} (a stream with state, computed from "
+            "the variables it reads; or bind it itself)"]
 
 
 def _tick_figures(v: Verdict, s: Any, r: RequirementPlan, n: int, b: Bindings | None) -> None:

@@ -70,7 +70,7 @@ def _cell(x, unknown: bool = False) -> str:
 
 
 def audit(tmp, doc: dict, rows: list[dict], columns: list[str], unknown=frozenset(),
-          whole: bool = False) -> tuple[list, str]:
+          whole: bool = False, exits=(0, 1, 3)) -> tuple[list, str]:
     """The verdicts (id, verdict, first violation's tick) of ``doc`` over ``rows`` (the
     ``columns`` of each; ``(row, column)`` in ``unknown`` written ``unknown``), and the
     output; ``whole``: the streamed CSV judge off."""
@@ -86,7 +86,7 @@ def audit(tmp, doc: dict, rows: list[dict], columns: list[str], unknown=frozense
                                         str(tmp / "a.json")])
     finally:
         streamed.ENABLED = saved
-    assert got.exit_code in (0, 1, 3), got.output
+    assert got.exit_code in exits, got.output
     res = json.loads((tmp / "a.json").read_text(encoding="utf-8"))
     return [(v["requirement"], v["verdict"], (v.get("first_violation") or {}).get("tick"))
             for log in res["logs"] for v in log["verdicts"]], got.output
@@ -292,3 +292,14 @@ def test_the_lmcps_export(tmp_path):
     assert "violated" in {v for _i, v, _t in got}
     assert "rollAtZero: FRET's definition of this Internal variable computed tick by tick" \
         in out
+
+
+def test_an_input_missing_is_named_with_the_stream_that_reads_it(tmp_path):
+    rows = [{"Psi": 0.0, "autopilot_engaged": False, "roll_angle": 0.0, "roll_cmd": 0.0,
+             "HDGmodeCmd": 0.0}]
+    doc = export(True)
+    doc["requirements"] = [{"reqid": "P1", "fulltext": REQUIREMENTS[2][1]}]
+    got, out = audit(tmp_path, doc, rows, list(rows[0]), exits=(2,))
+    assert got == [("P1", "error", None)]
+    assert "no binding for 'hdg'" in out and "'hdg' is read by FRET's definition of " \
+        "psiAtZero" in " ".join(out.split())
