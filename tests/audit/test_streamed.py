@@ -165,7 +165,7 @@ def test_the_streamed_audit_is_the_whole_trace_audit_long(tmp_path_factory, n, t
     check_trace(tmp_path_factory, n, timed, marks, rows, chunk, rnd)
 
 
-@settings(max_examples=25, deadline=None)
+@settings(max_examples=8, deadline=None)
 @given(st.integers(1, 60), st.booleans(), st.sampled_from(["nan", "unknown", "both"]),
        st.integers(1, 7), st.integers(3, 9), st.randoms(use_true_random=False))
 def test_completions_followed_in_a_read_of_their_own(tmp_path_factory, n, timed, marks, rows,
