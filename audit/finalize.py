@@ -42,7 +42,7 @@ if TYPE_CHECKING:
     from fretc.audit.verdict import LogAudit, Verdict
 
 __all__ = ["finalize", "between_ticks", "prepare", "unknown_of", "NAN_FALSE_NOTE",
-           "vacuous_note", "judged", "decided", "shown_ticks", "StreamTicks"]
+           "vacuous_note", "judged", "decided", "shown_ticks", "StreamTicks", "counts_ticks"]
 
 #: The note of every verdict judged under a binding file's ``[tick] nan = "false"``.
 NAN_FALSE_NOTE = ("NaN policy of the binding file ([tick] nan = \"false\"): a comparison "
@@ -244,11 +244,19 @@ def _three_valued_takes(r, res: ClockPass) -> str | None:
     f = r.formalization
     if not f.pt_causal or not supports(f.pt):
         return "its pt formula has a future-time function"
-    if res.tick_gaps and (r.requirement.timing.kind in ("within", "for", "after")
-                          or any(getattr(x, "hi", None) is not None for x in walk(f.pt))):
+    if res.tick_gaps and counts_ticks(r):
         return ("it counts ticks on a clock that ticks on a topic's messages, and a gap of "
                 "that topic lost an unknown number of them")
     return None
+
+
+def counts_ticks(r: RequirementPlan) -> bool:
+    """Whether requirement ``r`` (formalized) counts ticks: a ``within``, ``for`` or
+    ``after`` timing, or a bounded operator in its pt formula (across a gap that lost an
+    unknown number of ticks it is judged up to the gap: :func:`prepare`)."""
+    assert r.requirement is not None and r.formalization is not None  # (formalized)
+    return (r.requirement.timing.kind in ("within", "for", "after")
+            or any(getattr(x, "hi", None) is not None for x in walk(r.formalization.pt)))
 
 
 def prepare(r: RequirementPlan, res: ClockPass, bindings: Bindings | None, v: Verdict,

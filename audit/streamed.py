@@ -30,9 +30,9 @@ trials; ``--coverage``; an automaton too large for tables) or where the trace le
 its ticks unknown, which the three-valued judge decides: an ``unknown`` cell in a column it
 reads, a ``gap`` or ``cut`` row. Those are known only once read, so the file is then read a
 second time, keeping those requirements' columns (:class:`fretc.audit.log` does both). A
-requirement whose comparisons read NaN (:data:`NAN_REASON`) or that reads ``unknown`` cells
-(:data:`UNKNOWN_CELLS`) is instead judged in three-valued semantics as the file is read
-again (:mod:`fretc.audit.streamed_three`, in memory that does not grow with the trace
+requirement whose comparisons read NaN (:data:`NAN_REASON`), that reads ``unknown`` cells
+(:data:`UNKNOWN_CELLS`) or, on a trace with a ``gap`` row (:data:`GAP_ROW`), that counts no
+ticks, is instead judged in three-valued semantics as the file is read again (:mod:`fretc.audit.streamed_three`, in memory that does not grow with the trace
 either), and only where those streams cannot take it are its columns kept. Every read of one audit (the second one, and the values
 read again around a violation) stops at the bytes the first one read
 (:attr:`fretc.logs.CsvSource.extent`, the file's size when first opened): a file still being
@@ -69,8 +69,10 @@ if TYPE_CHECKING:
 NAN_REASON = "a comparison reads NaN"
 #: the start of why a requirement reading ``unknown`` cells is given up (the columns follow)
 UNKNOWN_CELLS = "unknown cells in "
+#: why every requirement is given up on a trace with a ``gap`` row
+GAP_ROW = "a gap row"
 
-__all__ = ["ENABLED", "NAN_REASON", "UNKNOWN_CELLS", "StreamedResult", "CsvStreams",
+__all__ = ["ENABLED", "NAN_REASON", "UNKNOWN_CELLS", "GAP_ROW", "StreamedResult", "CsvStreams",
            "unstreamed_reason", "values_around"]
 
 #: Whether CSV traces are judged while read (tests set it False to compare the two judges).
@@ -218,7 +220,7 @@ class CsvStreams:
     def close(self, source: CsvSource) -> None:
         """After the read: the results of the streams, or why a requirement is judged
         whole after all (module docstring)."""
-        marks = ("a gap row" if source.gap_rows else
+        marks = (GAP_ROW if source.gap_rows else
                  "a cut row" if source.cut_time is not None else None)
         for s in self.streams:
             i = s.r.index

@@ -1,12 +1,15 @@
-"""CSV traces whose comparisons read NaN, or with ``unknown`` cells, judged in three-valued
-semantics while they are read: the verdict, LTL3 verdict and evidence
+"""CSV traces whose comparisons read NaN, or with ``unknown`` cells or ``gap`` rows, judged in
+three-valued semantics while they are read: the verdict, LTL3 verdict and evidence
 :func:`fretc.audit.unknown_ticks.judge_three` gives over the whole trace, in memory that does
 not grow with the trace.
 
 A requirement judged as a CSV trace is read (:mod:`fretc.audit.streamed`) gives up at the
 first chunk where one of its comparisons reads NaN, and one reading a column with an
-``unknown`` cell is given up at the end: those ticks are unknown (fretc's NaN rule,
-docs/guide/ticks.md), and its verdict is what every way of filling them agrees on. The
+``unknown`` cell, or any on a trace with a ``gap`` row (every column unknown there), is given
+up at the end: those ticks are unknown (fretc's NaN rule, docs/guide/ticks.md), and its
+verdict is what every way of filling them agrees on (a requirement that counts ticks is
+judged up to a gap row instead, by the whole-trace judge: :func:`fretc.audit.finalize.
+prepare`). The
 audit then reads the trace again, within the bytes the first read read
 (:attr:`fretc.logs.CsvSource.extent`), with these streams for each such requirement, each
 the counterpart of one part of the three-valued judge:
@@ -37,8 +40,8 @@ bytes (``tests/audit/test_streamed.py``). A requirement is judged whole after al
 streams cannot take it: an automaton or atom they do not evaluate a chunk at a time (an
 uninterpreted function, a comparison over ``pre``), a leaf of the pt formula that reads
 earlier ticks (the completions' program), more than
-:data:`fretc.monitors.definite_stream.MAX_RUNS` runs of unknown ticks, or a trace with
-``gap`` or ``cut`` rows (judged whole as before). Memory: per requirement the streams'
+:data:`fretc.monitors.definite_stream.MAX_RUNS` runs of unknown ticks, a ``gap`` row where it
+counts ticks, or a ``cut`` row (judged whole as before). Memory: per requirement the streams'
 state (as :mod:`fretc.audit.streamed`'s, the runs of unknown ticks, at most
 :data:`fretc.monitors.completions.MAX_STATES` states of the completions), and the rows of the
 trace's ``unknown`` cells. CPU: one read of the trace more (two where the completions could
@@ -64,8 +67,8 @@ from fretc.monitors.completions_stream import CompletionsStream, completions_uns
 from fretc.monitors.kleene_stream import KleeneStream, Ltl3SetStream
 from fretc.monitors.nan import nan_ticks_of
 from fretc.monitors.vectorized import VectorizeError
-from fretc.audit.finalize import StreamTicks, decided
-from fretc.audit.streamed import NAN_REASON, UNKNOWN_CELLS, CsvStreams
+from fretc.audit.finalize import StreamTicks, counts_ticks, decided
+from fretc.audit.streamed import GAP_ROW, NAN_REASON, UNKNOWN_CELLS, CsvStreams
 from fretc.audit.unknown_ticks import (COMPLETED_NOTE, outgrew_words, pt_decides_note,
                                        unknown_reason)
 from fretc.audit.verdict import Ltl3
@@ -311,16 +314,20 @@ def judged_three(plan: AuditPlan, streams: CsvStreams, source: CsvSource) -> Non
     ``streams`` gave up for a NaN (:data:`NAN_REASON`), on a trace without ``gap`` or
     ``cut`` rows and without ``unknown`` cells in the columns they read; those decided move
     from ``streams.whole`` to ``streams.results`` (a :class:`ThreeResult`)."""
-    if source.gap_rows or source.cut_time is not None:
+    if source.cut_time is not None:
         return
     by_index = {r.index: r for r in plan.requirements}
+    gaps = source.gap_rows
     todo = [by_index[i] for i, why in streams.whole.items()
-            if why == NAN_REASON or why.startswith(UNKNOWN_CELLS)]
+            if (why in (NAN_REASON, GAP_ROW) or why.startswith(UNKNOWN_CELLS))
+            and not (gaps and counts_ticks(by_index[i]))]
     three = ThreeStreams.of(todo)
     if not three.streams:
         return
-    three.unknown_rows = {c: np.asarray(sorted(rows), np.int64)
-                          for c, rows in source.unknown_rows.items() if c in three.names}
+    # (a gap row: every column unknown there, as csv_marks marks it)
+    three.unknown_rows = {c: np.asarray(sorted({*source.unknown_rows.get(c, ()), *gaps}),
+                                        np.int64) for c in three.names
+                          if source.unknown_rows.get(c) or gaps}
     for s in three.streams:  # (the completions beside them, from the first read's ticks)
         ends = list(streams.nan_ranges.get(s.r.index, ()))
         for c in s.names:
