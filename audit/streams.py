@@ -15,8 +15,9 @@ Unknown values (a gap, an ``unknown`` cell, a ``gap`` row, and NaN under fretc's
 each stream variable is unknown at a tick where its definition's value could differ for some
 value of the unknown inputs it reads, by Kleene's logic over the definition, tick by tick
 (``false and x`` is known whatever ``x``; ``if c then a else b`` with ``c`` known is the
-branch taken; a value held through ``pre`` is as known as when it was read), so a stream
-reset by known values is known again; the three-valued judge decides over the ticks it is
+branch taken; a value held through ``pre`` is as known as when it was read; after a tick
+that stands for an unknown number of ticks, a gap of the tick topic or a ``gap`` row, no held
+value is known), so a stream reset by known values is known again; the three-valued judge decides over the ticks it is
 unknown at (:mod:`fretc.audit.unknown_ticks`). Sound: no verdict rests on a value an unknown
 input could change.
 """
@@ -41,7 +42,7 @@ def with_streams(r: RequirementPlan, res: ClockPass, nan_unknown: bool) -> Clock
     if system is None or any(name not in res.columns for name in system.inputs):
         return res
     n = len(res.times)
-    got = stream_columns(system, res.columns, n, res.unknown, nan_unknown)
+    got = stream_columns(system, res.columns, n, res.unknown, nan_unknown, res.tick_gaps)
     unknown = dict(res.unknown)
     for name in system.names:
         mask = got.pop(f"{name}?")

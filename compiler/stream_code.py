@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import functools
 import math
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -82,8 +82,11 @@ def stream_code(system: StreamSystem, lang: str = "py", prefix: str = "",
     em = _Emitter(code, system, prefix)
     em.track = known
     code.knowns.update({x: f"k{x}" for x in code.inputs} if known else {})
-    for name, e in zip(system.names, system.exprs):
+    for name, e, boolean in zip(system.names, system.exprs, system.booleans):
         local = em.node(e)
+        if not local.startswith(f"{prefix}n"):  # (a slot, an input, a literal: a copy, so
+            # that its value at this tick outlives the slots' update)
+            local = em.knows(em.local(local, boolean), em.k(local))
         em.known[name] = local
         code.outputs.append(local)
     k = 0
@@ -265,14 +268,15 @@ def _pow(a: float, b: float) -> float:
 
 @functools.lru_cache(maxsize=64)
 def _runner(system: StreamSystem) -> Callable[..., tuple[list, ...]]:
-    """A Python function ``run(n, nan_unknown, c0, kc0, c1, kc1, ...)`` of the system's
-    inputs as lists of ``n`` values and of whether each is known, returning each
-    variable's ``n`` values, then whether each is known (lists)."""
+    """A Python function ``run(n, nan_unknown, gap, c0, kc0, c1, kc1, ...)`` of the
+    system's inputs as lists of ``n`` values and of whether each is known (``gap``: per
+    tick, whether it stands for an unknown number of ticks, after which no state is
+    known), returning each variable's ``n`` values, then whether each is known (lists)."""
     code = stream_code(system, known=True)
     ins = [f"c{k}, kc{k}" for k in range(len(code.inputs))]
     outs = [f"o{k}" for k in range(len(code.outputs))]
     outs += [f"k{x}" for x in outs]
-    src = [f"def run({', '.join(['n', 'nan_unknown'] + ins)}):"]
+    src = [f"def run({', '.join(['n', 'nan_unknown', 'gap'] + ins)}):"]
     src += [f"    {x} = [None] * n" for x in outs]
     src += [f"    {s} = {init}\n    k{s} = True" for s, init, _b in code.slots]
     src += ["    first = True", "    for t in range(n):"]
@@ -281,6 +285,9 @@ def _runner(system: StreamSystem) -> Callable[..., tuple[list, ...]]:
     src += python_tick(code, "        ")
     src += [f"        o{k}[t] = {x}\n        ko{k}[t] = {code.knowns.get(x, 'True')}"
             for k, x in enumerate(code.outputs)]
+    src += ["        if gap[t]:"]
+    src += [f"            ko{k}[t] = False" for k in range(len(code.outputs))]
+    src += [f"            k{s} = False" for s, _i, _b in code.slots]
     src += ["        first = False", f"    return ({''.join(f'{x}, ' for x in outs)})"]
     space: dict[str, Any] = {"_div": _div, "_mod": _mod, "_pow": _pow}
     exec(compile("\n".join(src), "<fretc streams>", "exec"), space)
@@ -289,7 +296,8 @@ def _runner(system: StreamSystem) -> Callable[..., tuple[list, ...]]:
 
 def stream_columns(system: StreamSystem, values: Mapping[str, np.ndarray], n: int,
                    unknown: Mapping[str, np.ndarray] | None = None,
-                   nan_unknown: bool = True) -> dict[str, np.ndarray]:
+                   nan_unknown: bool = True, gaps: Sequence[int] = ()
+                   ) -> dict[str, np.ndarray]:
     """Each variable of ``system`` over ``n`` ticks (a ``bool`` column for a truth value,
     else ``float64``), from its inputs' columns ``values`` (at least ``n`` values each;
     numbers read as doubles).
@@ -298,7 +306,10 @@ def stream_columns(system: StreamSystem, values: Mapping[str, np.ndarray], n: in
     absent: known everywhere), also ``name + "?"`` per variable: where its value is
     unknown, by Kleene's logic over the tick's definition (a value held through ``pre``
     is as known as when it was read; with ``nan_unknown``, an input or a comparison that
-    reads NaN is unknown: fretc's NaN rule).
+    reads NaN is unknown: fretc's NaN rule). ``gaps``: ticks that stand for an unknown
+    number of ticks (a gap of the tick topic, a ``gap`` row: :attr:`fretc.audit.columns.
+    ClockPass.tick_gaps`), at and after which every value is unknown until its definition
+    makes it known again (a reset may have happened in the ticks lost).
 
     Raises:
         KeyError: an input without a column."""
@@ -313,7 +324,11 @@ def stream_columns(system: StreamSystem, values: Mapping[str, np.ndarray], n: in
         if nan_unknown and floats:
             bad |= np.isnan(col)
         args += [col.tolist(), (~bad).tolist()]
-    got = _runner(system)(n, nan_unknown, *args)
+    gap = [False] * n
+    for t in gaps:
+        if 0 <= t < n:
+            gap[t] = True
+    got = _runner(system)(n, nan_unknown, gap, *args)
     m = len(system.names)
     out = {name: np.array(col, dtype=np.bool_ if b else np.float64)
            for name, b, col in zip(system.names, system.booleans, got[:m])}

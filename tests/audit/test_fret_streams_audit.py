@@ -303,3 +303,27 @@ def test_an_input_missing_is_named_with_the_stream_that_reads_it(tmp_path):
     assert got == [("P1", "error", None)]
     assert "no binding for 'hdg'" in out and "'hdg' is read by FRET's definition of " \
         "psiAtZero" in " ".join(out.split())
+
+
+def test_after_a_gap_row_the_held_value_is_unknown(tmp_path):
+    """A ``gap`` row stands for an unknown number of ticks, in which hdg may have been
+    engaged again: psiAtZero held over it is unknown (never violated by 20 - 3 > 5)."""
+    doc = export(True)
+    doc["requirements"] = [{"reqid": "P1", "fulltext": REQUIREMENTS[2][1]}]
+    (tmp_path / "p.json").write_text(json.dumps(doc), encoding="utf-8")
+    rest = ",false,0.0,0.0,0.0"
+    (tmp_path / "t.csv").write_text(
+        "time,Psi,hdg,autopilot_engaged,roll_angle,roll_cmd,HDGmodeCmd\n"
+        f"0.0,0.0,false{rest}\n0.1,3.0,true{rest}\n0.2,gap,gap,gap,gap,gap,gap\n"
+        f"0.3,20.0,false{rest}\n", encoding="utf-8")
+    for whole in (False, True):
+        streamed.ENABLED = not whole
+        try:
+            got = CliRunner().invoke(main, ["audit", "-r", str(tmp_path / "p.json"),
+                                            str(tmp_path / "t.csv"), "--tick-period", "100ms",
+                                            "--no-progress", "--json", str(tmp_path / "a.json")])
+        finally:
+            streamed.ENABLED = True
+        assert got.exit_code == 3, got.output
+        res = json.loads((tmp_path / "a.json").read_text(encoding="utf-8"))
+        assert [v["verdict"] for log in res["logs"] for v in log["verdicts"]] == ["unknown"]

@@ -159,3 +159,36 @@ def test_a_reset_makes_it_known_again():
     assert got["psiAtZero"][4] == 9.0
     nan = _three(system, dict(values, Psi=[0.0, float("nan"), 7.0, 9.0, 9.0]), {}, 5)
     assert nan["psiAtZero?"].tolist() == [False, True, True, True, False]
+
+
+BARE = _vars({"p": ("boolean", "pre q"), "q": ("boolean", "x and not p")}, {"x": "boolean"})
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.lists(st.booleans(), min_size=1, max_size=12))
+def test_a_bare_pre(xs):
+    """``p`` is ``pre q`` alone (no ``->``: FRET's false at the first tick): its value at a
+    tick is the slot's before the tick's update."""
+    system = stream_system(BARE, ["p"])
+    assert system is not None and system.names == ("p", "q")
+    p, q = [], []
+    for t, x in enumerate(xs):
+        p.append(False if t == 0 else q[t - 1])
+        q.append(x and not p[t])
+    got = stream_columns(system, {"x": np.array(xs, dtype=np.bool_)}, len(xs))
+    assert got["p"].tolist() == p and got["q"].tolist() == q
+    three = stream_columns(system, {"x": np.array(xs, dtype=np.bool_)}, len(xs), {})
+    assert three["p"].tolist() == p and not three["p?"].any()
+
+
+def test_after_a_gap_tick_nothing_held_is_known():
+    """A tick standing for an unknown number of ticks (a gap of the tick topic): a reset
+    may have happened in them, so psiAtZero is unknown until the next known reset."""
+    system = stream_system(LMCPS, ["psiAtZero"])
+    values = {"Psi": [0.0, 3.0, 7.0, 9.0, 9.0, 4.0],
+              "hdg": [False, True, True, True, False, True]}
+    cols = {k: np.array(v, dtype=np.bool_ if isinstance(v[0], bool) else np.float64)
+            for k, v in values.items()}
+    got = stream_columns(system, cols, 6, {}, gaps=[2])
+    assert got["psiAtZero?"].tolist() == [False, False, True, True, True, False]
+    assert not stream_columns(system, cols, 6, {})["psiAtZero?"].any()
