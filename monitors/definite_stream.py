@@ -38,8 +38,9 @@ from fretc.monitors.unknowns import Unknowns
 
 __all__ = ["DefiniteStream", "MAX_RUNS"]
 
-#: The most runs of unknown ticks kept per part of a requirement (two int64 each)
-MAX_RUNS = 1 << 16
+#: The most runs of unknown ticks kept per part of a requirement (two int64 each: 16 MB at
+#: most; a NaN in every tenth row of 10^7 rows is 10^6 runs)
+MAX_RUNS = 1 << 20
 #: scopes whose interval the mode's first occurrence places (as monitors/unknowns.py)
 _FIRST_OCCURRENCE = ("before", "after", "onlyBefore", "onlyAfter")
 
