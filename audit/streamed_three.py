@@ -252,7 +252,7 @@ class ThreeStreams:
                 elif lo != hi:  # (open: every completion followed, another read)
                     self.open[i] = (s.r, s.kleene.free)
             else:
-                self.whole[i] = why or "no NaN tick read"
+                self.whole[i] = why or "no unknown tick read"
         self.streams = []
 
 
@@ -348,6 +348,8 @@ def judged_three(plan: AuditPlan, streams: CsvStreams, source: CsvSource) -> Non
     for i, got in three.results.items():
         streams.results[i] = got  # type: ignore[assignment]  # (a ThreeResult beside them)
         del streams.whole[i]
+    for i, why in three.whole.items():  # (why the three-valued streams gave it up too)
+        streams.whole[i] = f"{streams.whole[i]}; {why}"
 
 
 def _completions(source: CsvSource, three: ThreeStreams) -> None:

@@ -344,3 +344,22 @@ def test_a_requirement_alone_is_judged_as_in_the_set(plan, tmp_path, marks):
     for r, whole in zip(plan.requirements, together):
         alone = audit_log(replace(plan, requirements=[r]), str(path)).to_json()["verdicts"]
         assert alone == [whole], r.id
+
+
+def test_more_runs_of_unknown_ticks_than_kept_go_back_to_the_whole_trace_judge(plan, tmp_path):
+    """Past MAX_RUNS runs of unknown ticks in a part, the three-valued streams give the
+    requirement up, and the judge holding its columns decides it: the same JSON."""
+    import fretc.monitors.definite_stream as definite_stream
+
+    rows = ["time,x,p,q,m"] + [f"{i / 10:.1f},{'nan' if i % 4 == 1 else '1.5'},{i % 3 == 0:d},"
+                               f"{i % 4 == 0:d},{i % 7 < 3:d}" for i in range(40)]
+    path = tmp_path / "runs.csv"
+    path.write_text("\n".join(rows) + "\n", encoding="utf-8")
+    got, whole, decided = _both(plan, str(path), {(definite_stream, "MAX_RUNS"): 3})
+    assert got == whole
+    back = {rid for rid, why in ((r.id, decided["whole"].get(r.index))
+                                 for r in plan.requirements) if why}
+    assert {"R1", "R4", "R7"} <= back - WHOLE
+    assert all(decided["whole"][r.index].endswith("; more runs of unknown ticks than the "
+                                                  "streams keep")
+               for r in plan.requirements if r.id in back - WHOLE)
