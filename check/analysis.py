@@ -49,6 +49,7 @@ from fretc.check.findings import CheckResult, Finding
 from fretc.check.findings import ids as _ids
 from fretc.check.findings import subsets_text
 from fretc.check.items import CheckItem, atom_variables, make_item
+from fretc.check.streams import CheckStream, check_streams, stream_atoms
 from fretc.check.solver import UNKNOWN, SpotWorker
 
 if TYPE_CHECKING:
@@ -133,12 +134,13 @@ def check_requirements(compiled: Sequence[Compiled], *, budget: Budget | None = 
         worker = SpotWorker(budget, deadline=deadline)
     try:
         checker = Checker(items, worker, mus_budget, engine=engine)
+        streams = check_streams(items)
         _run(checker, result, vacuity=vacuity, redundancy=redundancy,
-             progress=progress or _no_progress)
+             progress=progress or _no_progress, streams=streams)
         if inputs is not None or outputs is not None:
             from fretc.check.realizability import check_realizability  # lazy: numpy, if asked
             result.realizability = check_realizability(checker, result, inputs or [],
-                                                       outputs or [])
+                                                       outputs or [], streams)
         _link_findings(result)
         if witness_dir is not None:
             from fretc.check.witness import write_witnesses  # lazy: numpy, if asked
@@ -182,12 +184,16 @@ def _no_progress(stage: str, done: int, total: int, group: int, groups: int) -> 
 
 
 def _run(ck: Checker, result: CheckResult, *, vacuity: bool, redundancy: bool,
-         progress: Progress) -> None:
+         progress: Progress, streams: dict[str, CheckStream] | None = None) -> None:
     status: dict[int, dict[str, Any]] = {x.index: {"id": x.id, "source": x.compiled.entry.source,
                         "line": x.compiled.entry.line, "text": x.compiled.text,
                         "group": None, "satisfiable": None, "non_vacuous": None,
                         "redundant": None, "findings": []} for x in ck.items}
-    for name, why in ck.numeric.uninterpreted():
+    # (an atom reading a FRET stream variable: its reason names the stream)
+    forms = [f for x in ck.items for f in (x.phi, x.trigger, x.phi_ft, x.trigger_ft) if f]
+    why_of = dict(ck.numeric.uninterpreted())
+    why_of.update(stream_atoms(forms, streams or {}))
+    for name, why in sorted(why_of.items()):
         result.abstractions.append({"atom": name, "why": why})
     comps = ck.groups()
     for k, comp in enumerate(comps):

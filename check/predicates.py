@@ -24,7 +24,7 @@ given).
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Collection, Sequence
 from dataclasses import dataclass, field
 from fractions import Fraction
 from typing import Any
@@ -92,10 +92,16 @@ def is_predicate(node: Node) -> bool:
     return node.op == "cmp" and simple_comparison(node) is None
 
 
-def undecidable(node: Node) -> str | None:
+def undecidable(node: Node, streams: Collection[str] = ()) -> str | None:
     """Why the truth values of the comparison ``node`` cannot be decided tick by tick from
-    that tick's numbers, or None when they can."""
+    that tick's numbers, or None when they can. ``streams``: FRET's stream variables
+    (:mod:`fretc.check.streams`), whose values come from earlier ticks as a previous
+    value's do."""
     for n in ir.walk(node):
+        if n.op == "var" and ir.name_of(n) in streams:
+            return (f"{to_smv(node)} reads the stream variable {ir.name_of(n)} (FRET's "
+                    "definition through pre): which truth values it can take depends on the "
+                    "ticks before")
         if n.op == "pre":
             return (f"{to_smv(node)} reads the previous value of a number ({to_smv(n)}): "
                     "which truth values it can take depends on the tick before")
@@ -139,11 +145,13 @@ def comparisons(formulas: Sequence[Node]) -> list[Node]:
 
 def clusters(formulas: Sequence[Node], inputs: Sequence[str],
              witness: Witness | None = None,
-             undecided: list[tuple[Cluster, str]] | None = None) -> list[Cluster]:
+             undecided: list[tuple[Cluster, str]] | None = None,
+             streams: Collection[str] = ()) -> list[Cluster]:
     """The clusters of the comparisons of ``formulas`` (module docstring), each decided by
     z3; ``witness`` turns the model of each realizable valuation into what the cluster keeps.
     With ``undecided`` (a list), a cluster holding a predicate :func:`undecidable` refuses is
     appended to it with the reason, undecided (its invariant TRUE), instead of raising.
+    ``streams`` as :func:`undecidable` takes them.
 
     Raises:
         PredicateBudget: a cluster past :data:`MAX_VALUATIONS`.
@@ -152,7 +160,7 @@ def clusters(formulas: Sequence[Node], inputs: Sequence[str],
     numeric = comparisons(formulas)
     if undecided is None:
         for n in numeric:
-            if is_predicate(n) and (why := undecidable(n)) is not None:
+            if is_predicate(n) and (why := undecidable(n, streams)) is not None:
                 raise ValueError(why)
     parent: dict[str, str] = {}
 
@@ -179,7 +187,8 @@ def clusters(formulas: Sequence[Node], inputs: Sequence[str],
         names = list(dict.fromkeys(ir.name_of(x) for a in atoms for x in ir.walk(a)
                                    if x.op == "var"))
         c = Cluster(atoms, names, all(v in inputs for v in names))
-        why = next((w for a in atoms if is_predicate(a) and (w := undecidable(a))), None)
+        why = next((w for a in atoms if is_predicate(a) and (w := undecidable(a, streams))),
+                   None)
         if why is not None and undecided is not None:
             undecided.append((c, why))
             continue

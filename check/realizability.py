@@ -32,7 +32,7 @@ environment has to react to the outputs and the report says so.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Collection, Sequence
 from typing import Any, TYPE_CHECKING
 
 from fretc.common.errors import CheckError
@@ -48,6 +48,7 @@ from fretc.check.witness import formula_atoms
 from fretc.check.numeric_abstraction import NumericAbstraction, simple_comparison
 from fretc.check.predicates import PredicateBudget, clusters, mixed_invariants
 from fretc.check.safety_game import Outside, game_atoms, letter_name
+from fretc.check.streams import CheckStream, check_streams, stream_roles
 from fretc.compiler.printers import mangle, to_smv, to_spot
 
 if TYPE_CHECKING:
@@ -72,13 +73,20 @@ def _atom_vars(atom) -> list[str]:
     return [ir.name_of(n) for n in ir.walk(atom) if n.op in ("ap", "var")]
 
 
-def check_realizability(checker: Checker, result: CheckResult, inputs: Sequence[str], outputs: Sequence[str]
-                        ) -> dict:
+def check_realizability(checker: Checker, result: CheckResult, inputs: Sequence[str],
+                        outputs: Sequence[str],
+                        streams: dict[str, CheckStream] | None = None) -> dict:
     """Decide realizability per group; append ``unrealizable`` / ``unknown`` findings
     to ``result`` and return the JSON-able summary (module docstring). A group reading
     a variable in neither ``inputs`` nor ``outputs`` is not decided: its entry's
     ``realizable`` is None, its ``undeclared`` the variables with the requirements reading
     them, and an ``undeclared`` finding (severity ``input``: exit 2) says how to declare them.
+    ``streams``: the FRET stream variables the items read (:mod:`fretc.check.streams`;
+    None: :func:`fretc.check.streams.check_streams` of the items): each takes the role of
+    the variables its definition reads (the summary's ``streams``), a variable its
+    definition reads declared neither is named with the stream reading it, and an answer
+    won by the player a stream is given to is unknown (the stream is free to it at each
+    tick, where its definition fixes it).
 
     Raises :class:`RealizabilityError` when a variable is declared both input and output.
     """
@@ -86,24 +94,30 @@ def check_realizability(checker: Checker, result: CheckResult, inputs: Sequence[
     both = sorted(set(inputs) & set(outputs))
     if both:
         raise RealizabilityError("declared both input and output: " + ", ".join(both))
+    streams = check_streams(checker.items) if streams is None else streams
+    roles, _ = stream_roles(streams, inputs, outputs)
     used = []
     for x in checker.items:
         for v in x.variables:
-            if v not in used:
-                used.append(v)
+            for u in (streams[v].reads if v in streams else (v,)):
+                if u not in used:
+                    used.append(u)
     declared = set(inputs) | set(outputs)
     summary: dict[str, Any] = {"machine": MACHINE, "inputs": inputs, "outputs": outputs,
                "undeclared": [v for v in used if v not in declared],
                "unused": [v for v in inputs + outputs if v not in used],
                "groups": []}
-    decide = _Decider(checker, inputs)
+    if streams:
+        summary["streams"] = {n: {"reads": list(s.reads), "role": roles.get(n)}
+                              for n, s in sorted(streams.items())}
+    decide = _Decider(checker, inputs + [n for n, r in roles.items() if r == "input"], roles)
     for comp in checker.groups():
         entry: dict = {"requirements": _ids(comp)}
-        readers = undeclared_variables(comp, declared)
+        readers = undeclared_variables(comp, declared, streams)
         if readers:  # (FRET's rule: no role assumed, the group not decided)
             entry["realizable"] = None
             entry["undeclared"] = readers
-            result.findings.append(_undeclared_finding(comp, readers))
+            result.findings.append(_undeclared_finding(comp, readers, streams))
             summary["groups"].append(entry)
             continue
         ans = decide(comp)
@@ -130,33 +144,44 @@ def check_realizability(checker: Checker, result: CheckResult, inputs: Sequence[
     return summary
 
 
-def undeclared_variables(items: Sequence[Any], declared: set[str] | frozenset[str]
+def undeclared_variables(items: Sequence[Any], declared: set[str] | frozenset[str],
+                         streams: dict[str, CheckStream] | None = None
                          ) -> dict[str, list[str]]:
     """The variables of the check items ``items`` (:class:`fretc.check.items.CheckItem`)
     that are not in ``declared`` (the inputs and the outputs), each with the ids of the
-    requirements that read it, in the order the requirements read them."""
+    requirements that read it, in the order the requirements read them. A stream variable
+    of ``streams`` (:mod:`fretc.check.streams`) is not one: the variables its definition
+    reads are, read by the requirements reading it."""
+    streams = streams or {}
     out: dict[str, list[str]] = {}
     for x in items:
         for v in x.variables:
-            if v not in declared:
-                out.setdefault(v, [])
-                if x.id not in out[v]:
-                    out[v].append(x.id)
+            for u in (streams[v].reads if v in streams else (v,)):
+                if u not in declared:
+                    out.setdefault(u, [])
+                    if x.id not in out[u]:
+                        out[u].append(x.id)
     return out
 
 
-def _undeclared_finding(comp: Sequence[Any], readers: dict[str, list[str]]) -> Finding:
+def _undeclared_finding(comp: Sequence[Any], readers: dict[str, list[str]],
+                        streams: dict[str, CheckStream] | None = None) -> Finding:
     """The ``undeclared`` finding of a group whose realizability is not decided:
     ``readers`` (:func:`undeclared_variables`) in words, with the FRET kind an export gives
-    a variable (an Internal or Mode variable fretc reads as a free one) and how to declare
-    them. Its severity ``input`` makes the exit code 2 (an input error, as FRET refuses to
-    check realizability then); the checks that need no roles are reported as ever."""
+    a variable (an Internal or Mode variable fretc reads as a free one), the stream
+    variables of ``streams`` whose definitions read it, and how to declare them. Its
+    severity ``input`` makes the exit code 2 (an input error, as FRET refuses to check
+    realizability then); the checks that need no roles are reported as ever."""
     fret: dict[str, Any] = {}
     for x in comp:
         for v in getattr(x.compiled.entry, "variables", ()):
             if v.name in readers and v.kind:
                 fret.setdefault(v.name, v)
-    names = [f"{v} (read by {', '.join(ids)})" for v, ids in readers.items()]
+    via = _through_streams(comp, readers, streams or {})
+    names = [f"{v} (read by {', '.join(ids)}" + (
+        f"{' through' if v in via[0] else ', and by'} the stream variable"
+        f"{'s' * (len(via[1][v]) > 1)} {', '.join(via[1][v])}" if v in via[1] else "")
+        + ")" for v, ids in readers.items()]
     listed = names[0] if len(names) == 1 else ", ".join(names[:-1]) + " and " + names[-1]
     kinds = [f"{v} {'an' if f.kind[0] in 'AEIOU' else 'a'} {f.kind}"
              + (f" of {f.component}" if f.component else "")
@@ -171,8 +196,22 @@ def _undeclared_finding(comp: Sequence[Any], readers: dict[str, list[str]]) -> F
            "@inputs/@outputs in the .fret file, or its Input/Output role in FRET's glossary "
            "(as FRET, realizability is checked only when every variable is the "
            "environment's or the controller's)")
-    return Finding("undeclared", "input", involved, msg,
-                   details={"undeclared": readers, "group": _ids(comp)})
+    details: dict[str, Any] = {"undeclared": readers, "group": _ids(comp)}
+    if via[1]:
+        details["through_streams"] = via[1]
+    return Finding("undeclared", "input", involved, msg, details=details)
+
+
+def _through_streams(comp: Sequence[Any], readers: dict[str, list[str]],
+                     streams: dict[str, CheckStream]) -> tuple[set[str], dict[str, list[str]]]:
+    """Of the undeclared ``readers``: those no requirement of ``comp`` reads itself (only
+    through streams), and each one's streams of ``streams`` read by ``comp`` whose
+    definitions read it (FRET's rule names a definition's own inputs)."""
+    read = {v for x in comp for v in x.variables}
+    via = {u: sorted(n for n, s in streams.items() if n in read and u in s.reads)
+           for u in readers}
+    return ({u for u in readers if u not in read},
+            {u: names for u, names in via.items() if names})
 
 
 class _Decider:
@@ -184,8 +223,10 @@ class _Decider:
     dict: ``realizable``, ``method``, and ``mealy_states`` / ``strategy`` (realizable) or
     ``counter`` (the input lasso or None), ``note``, ``run`` (unrealizable)."""
 
-    def __init__(self, checker, inputs: list[str]):
+    def __init__(self, checker, inputs: list[str], roles: dict[str, str] | None = None):
         self.checker, self.inputs = checker, inputs
+        #: stream variable -> "input" or "output" (:func:`fretc.check.streams.stream_roles`)
+        self.roles = roles or {}
         self.cache: dict[tuple, Any] = {}
         self.notes: list[str] = []
         #: items' indexes -> why Spot's answer for them was not exact (they are UNKNOWN)
@@ -197,8 +238,30 @@ class _Decider:
             ans = None
             if self.checker.engine != "spot":
                 ans = self._game(items)
-            self.cache[key] = ans if ans is not None else self._spot(items)
+            ans = ans if ans is not None else self._spot(items)
+            self.cache[key] = self._streams_won(items, ans)
         return self.cache[key]
+
+    def _streams_won(self, items, ans) -> Any:  # UNKNOWN or a dict
+        """``ans``, or UNKNOWN when the player that wins it was given a stream variable
+        (:mod:`fretc.check.streams`: free to it at each tick, where its definition fixes it
+        from the past), as a win over a comparison reading a previous value proves nothing
+        (:func:`_predicate_invariants`)."""
+        if ans == UNKNOWN:
+            return ans
+        side = "output" if ans["realizable"] else "input"
+        won = sorted({v for x in items for v in x.variables if self.roles.get(v) == side})
+        if not won:
+            return ans
+        self.checker.unknown += 1
+        player = "controller" if ans["realizable"] else "environment"
+        self.inexact[tuple(x.index for x in items)] = (
+            ("realizable" if ans["realizable"] else "unrealizable") + " with the stream "
+            f"variable{'s' * (len(won) > 1)} {', '.join(won)} given to the {player} (the "
+            "role of the variables its definition reads), free at each tick where its "
+            "definition fixes it from the past: the {player}'s win proves nothing".replace(
+                "{player}", player))
+        return UNKNOWN
 
     def _game(self, items) -> Any:  # UNKNOWN or a dict
         """The symbolic games' answer, or None when Spot has to decide (module docstring):
@@ -303,7 +366,8 @@ class _Decider:
                           and (c := simple_comparison(a)) and c[0] in inputs})
         out_vars = sorted({c[0] for a in atoms if a.op == "cmp"
                            and (c := simple_comparison(a)) and c[0] not in inputs})
-        env_clusters, ctl_clusters, ctl_why, env_why = _predicate_invariants(phis, inputs)
+        env_clusters, ctl_clusters, ctl_why, env_why = _predicate_invariants(
+            phis, inputs, self.roles)
         inv_in = ir.and_all(*(checker.numeric.variable_invariant(v) for v in in_vars),
                             env_clusters)
         inv_out = ir.and_all(*(checker.numeric.variable_invariant(v) for v in out_vars),
@@ -338,7 +402,8 @@ class _Decider:
                 "note": "", "run": []}
 
 
-def _predicate_invariants(phis: Sequence[ir.Node], inputs: Sequence[str]
+def _predicate_invariants(phis: Sequence[ir.Node], inputs: Sequence[str],
+                          streams: Collection[str] = ()
                           ) -> tuple[ir.Node, ir.Node, list[str], list[str]]:
     """The comparisons of several variables in ``phis`` made exact for Spot's game
     (:mod:`fretc.check.predicates`): ``(environment's invariant, controller's invariant, why
@@ -348,10 +413,11 @@ def _predicate_invariants(phis: Sequence[ir.Node], inputs: Sequence[str]
     values no numbers give: a win of that player proves nothing. A cluster of inputs and
     outputs gives the controller only the choices numbers realize whatever the inputs'
     numbers (:func:`fretc.check.predicates.mixed_invariants`): its wins are sound, its losses
-    are not."""
+    are not. A comparison reading a stream variable of ``streams`` is undecided as one
+    reading a previous value (:func:`fretc.check.predicates.undecidable`)."""
     undecided: list = []
     try:
-        found = clusters(phis, inputs, undecided=undecided)
+        found = clusters(phis, inputs, undecided=undecided, streams=streams)
     except PredicateBudget as exc:
         return ir.TRUE, ir.TRUE, [str(exc)], [str(exc)]
     env_inv: list[ir.Node] = []

@@ -177,7 +177,7 @@ ANALYSIS_USE = "in the analysis (the emitted formulas keep its name)"
 
 def unused(variables: list[FretVariable] | tuple[FretVariable, ...], read: set[str],
            whole: Collection[str] = (), use: str = ANALYSIS_USE,
-           streams: bool = False) -> list[str]:
+           streams: bool = False, stream_use: str = "") -> list[str]:
     """What the FRET declarations of the variables in ``read`` say, and how fretc reads
     it, one sentence per variable (sorted by name): an Internal variable's definition used
     (:func:`with_fret_definitions`) or why it is not (then a free variable), a Mode or Function
@@ -186,15 +186,23 @@ def unused(variables: list[FretVariable] | tuple[FretVariable, ...], read: set[s
     definition used is used (after "that definition"). ``read`` is closed over the
     definitions: a variable an expanded definition reads is read. ``streams``: the stream
     variables (a definition reading itself through ``pre``) are computed tick by tick (the
-    runtime monitors: :mod:`fretc.fretish.fret_streams`), not free."""
+    runtime monitors: :mod:`fretc.fretish.fret_streams`), not free. ``stream_use``: how an
+    analysis reads a stream variable instead (``fretc check``: a comparison reading it as
+    one reading its definition's variables, after "that definition is a stream with state
+    (...): "); either makes the variables a stream reads read."""
     defs = definitions(tuple(variables))
-    read = _through_definitions(read, {**defs.values, **(defs.streams if streams else {})})
+    read = _through_definitions(read, {**defs.values, **(defs.streams if streams or stream_use
+                                                            else {})})
     out = []
     for v in sorted((v for v in variables if v.name in read), key=lambda v: v.name):
         if v.kind == "Internal" and v.name in defs.values:
             what = "constant" if constant_of(v) is not None else "definition"
             out.append(f"{v.name}: FRET defines it (Internal) as {_short(v.assignment)}; "
                        f"that {what} {use}")
+        elif v.kind == "Internal" and stream_use and v.name in defs.streams:
+            out.append(f"{v.name}: FRET defines it (Internal) as {_short(v.assignment)}; "
+                       "that definition is a stream with state ("
+                       + stream_why(defs.free.get(v.name, "")) + f"): {stream_use}")
         elif v.kind == "Internal" and streams and v.name in defs.streams:
             out.append(f"{v.name}: FRET defines it (Internal) as {_short(v.assignment)}; "
                        "that definition is "
@@ -240,14 +248,15 @@ def _short(text: str, limit: int = 160) -> str:
 
 
 def fret_declarations(entries: list, whole: Collection[str] = (), use: str = ANALYSIS_USE,
-                      streams: bool = False) -> tuple[list, list[str]]:
+                      streams: bool = False, stream_use: str = "") -> tuple[list, list[str]]:
     """``entries`` with their FRET export's definitions applied
     (:func:`with_fret_definitions`, with ``streams`` as there: the runtime monitors), and
-    the notes of :func:`unused` (``whole``, ``use`` and ``streams`` as there) over the
-    variables they read as written (``fretc check``'s and ``fretc shield``'s);
-    ``entries`` and no note when none comes from an export that declares variables."""
+    the notes of :func:`unused` (``whole``, ``use``, ``streams`` and ``stream_use`` as
+    there) over the variables they read as written (``fretc check``'s and ``fretc
+    shield``'s); ``entries`` and no note when none comes from an export that declares
+    variables."""
     declared = list({(v.component, v.name): v for e in entries for v in e.variables}.values())
     if not declared:
         return entries, []
-    notes = unused(declared, names_read(entries), whole, use, streams)
+    notes = unused(declared, names_read(entries), whole, use, streams, stream_use)
     return [with_fret_definitions(e, streams=streams) for e in entries], notes

@@ -140,7 +140,7 @@ def _export(kind_of_b: str, assignment: str = "") -> dict:
 
 @pytest.mark.parametrize("kind, assignment, words", [
     ("Output", "", None),
-    ("Internal", "a and pre b", "b an Internal of ctrl, a free variable to fretc"),
+    ("Internal", "a and b", "b an Internal of ctrl, a free variable to fretc"),
     ("Mode", "", "b a Mode of ctrl, a free variable to fretc"),
     ("", "", None),
 ])
@@ -148,8 +148,9 @@ def test_a_fret_export_variable_without_a_role_is_named_with_its_fret_kind(
         tmp_path, kind, assignment, words):
     """A FRET export whose glossary gives every variable Input or Output is decided as
     before; a variable FRET declares Internal whose definition fretc keeps free (it reads
-    itself through pre; a definition fretc reads is expanded:
-    tests/fretish/test_lustre_definitions.py), Mode or not at all is undeclared for
+    itself without pre, a cycle Lustre gives no value; a definition fretc reads is expanded:
+    tests/fretish/test_lustre_definitions.py, one reading itself through pre is a stream:
+    tests/check/test_check_streams.py), Mode or not at all is undeclared for
     realizability, named with FRET's kind."""
     f = tmp_path / "p.json"
     f.write_text(json.dumps(_export(kind, assignment)), encoding="utf-8")

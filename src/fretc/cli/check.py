@@ -32,6 +32,7 @@ from typing import TYPE_CHECKING, Any
 import click
 
 from fretc.check.budget import MUS_BUDGET
+from fretc.check.streams import STREAM_USE
 from fretc.common.textsafe import file_stems
 
 from fretc.cli.options import (TEXT_ATTRIBUTE_OPTION, TICK_PERIOD_OPTION, FiniteRange,
@@ -61,7 +62,8 @@ def render_text(result: CheckResult) -> str:
                      + (", ".join(rz["inputs"]) or "-")
                      + "; outputs " + (", ".join(rz["outputs"]) or "-")
                      + (("; declared neither: " + ", ".join(rz["undeclared"]))
-                        if rz["undeclared"] else ""))
+                        if rz["undeclared"] else "")
+                     + _streams_text(rz.get("streams", {})))
         for c in rz["groups"]:
             status = c["realizable"]
             extra = ""
@@ -116,6 +118,15 @@ def render_text(result: CheckResult) -> str:
                  + (f" ({result.unknown_queries} past their budget or refused)"
                     if result.unknown_queries else "") + f"; exit {result.exit_code}")
     return "\n".join(lines)
+
+
+def _streams_text(streams: dict[str, dict[str, Any]]) -> str:
+    """The FRET stream variables of a realizability summary with their roles (those of the
+    variables their definitions read: :mod:`fretc.check.streams`), "" when none."""
+    role = {"input": "the environment's", "output": "the controller's", None: "no role"}
+    return "".join(("; streams: " if k == 0 else ", ") + f"{n} ({role[s['role']]}: reads "
+                   + (", ".join(s["reads"]) or "no variable") + ")"
+                   for k, (n, s) in enumerate(streams.items()))
 
 
 def _fmt(v) -> str:
@@ -197,7 +208,7 @@ def check_cmd(files: tuple[str, ...], inputs: str | None, outputs: str | None,
                                req_files + [("the binding file", bindings_file)],
                                [("--witness-dir", witness_dir)], req_folders)
     rs = requirement_set(files, bindings_file, component=component, only=only,
-                         exclude=exclude, tick_period=tick_period)
+                         exclude=exclude, tick_period=tick_period, stream_use=STREAM_USE)
     ins, outs = names_of(inputs), names_of(outputs)
     settings = _Settings(Budget(budget, memory_budget, query_cpu), mus_budget,
                          not no_redundancy, engine,
