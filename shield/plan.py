@@ -161,6 +161,7 @@ def plan(compiled: Sequence[Any], inputs: Sequence[str], outputs: Sequence[str],
             notes.append(bound)
         item = make_item(k, c)
         undeclared = [v for v in item.variables if v not in inputs and v not in outputs]
+        _refuse_streams(c, undeclared)
         if undeclared:
             fret = {v.name: v for v in getattr(c.entry, "variables", ())}
             kinds = [f"{v} is {'an' if fret[v].kind[0] in 'IO' else 'a'} {fret[v].kind} "
@@ -203,6 +204,32 @@ def plan(compiled: Sequence[Any], inputs: Sequence[str], outputs: Sequence[str],
     return Plan(inputs, outputs, components, monitored, notes, whole)
 
 
+def _refuse_streams(c: Any, undeclared: Sequence[str]) -> None:
+    """Refuse the requirement ``c`` (:class:`fretc.compiler.build.Compiled`) when it reads
+    a FRET stream variable among ``undeclared`` (an Internal variable whose Lustre
+    definition reads itself through ``pre``: :mod:`fretc.check.streams`), naming it, the
+    variables its definition reads and why: the shield's game and runtime step the
+    requirements' monitors over the inputs and outputs of one tick, and hold no state of a
+    stream (``fretc check`` reads such a comparison as an independent proposition, which
+    a shield cannot enforce).
+
+    Raises:
+        ShieldError: it reads one."""
+    from fretc.check.streams import streams_of_entry
+
+    found = streams_of_entry(c.entry, undeclared)
+    if not found:
+        return
+    said = "; ".join(f"{n} (its definition {s.text} reads "
+                     + (", ".join(s.reads) or "no variable") + " now and through pre)"
+                     for n, s in found.items())
+    raise ShieldError(f"{_where(c)}: {c.id} reads the FRET stream variable"
+                      f"{'s' * (len(found) > 1)} {said}: the shield does not compute stream "
+                      "variables (its machines step over one tick's inputs and outputs); "
+                      "leave the requirement out (--exclude), or declare the variable an "
+                      "input (--inputs) for the shield to read it from the system")
+
+
 def _assumption(index: int, c: Any, inputs: Sequence[str], outputs: Sequence[str]
                 ) -> CheckItem:
     """An assumption of the environment as the game takes it (module docstring).
@@ -216,6 +243,7 @@ def _assumption(index: int, c: Any, inputs: Sequence[str], outputs: Sequence[str
                           + (f" ({c.error})" if c.error else " (free-form text)"))
     item = make_item(index, c)
     undeclared = [v for v in item.variables if v not in inputs and v not in outputs]
+    _refuse_streams(c, undeclared)
     if undeclared:
         raise ShieldError(f"{_where(c)}: assumption {c.id} reads {', '.join(undeclared)}, "
                           "declared neither input nor output")

@@ -36,6 +36,7 @@ from __future__ import annotations
 
 import sys
 from pathlib import Path
+from typing import Any
 
 import click
 
@@ -106,6 +107,8 @@ def testgen_cmd(files: tuple[str, ...], out_dir: str, with_pytest: bool, binding
         for o in doc[which]:
             click.echo(shown(f"  {which}: {o['requirement']} {o['obligation']}: "
                              f"{o['reason']}"))
+    for note in _stream_notes(compiled):
+        click.echo(shown(f"  note: {note}"))
     if bindings is not None:
         logs = [t for t in doc["tests"] if t["log"]]
         click.echo(shown(f"{len(logs)} of {len(doc['tests'])} tests written as MCAP logs "
@@ -120,6 +123,32 @@ def testgen_cmd(files: tuple[str, ...], out_dir: str, with_pytest: bool, binding
             sys.exit(1)
     sys.exit(3 if doc["unknown"] else 0)
 
+
+
+def _stream_notes(compiled: list[Any]) -> list[str]:
+    """One note per FRET stream variable the requirements ``compiled`` read (an Internal
+    variable whose Lustre definition reads itself through ``pre``:
+    :mod:`fretc.check.streams`): the tests give it values of their own at each tick (its
+    column), as check's engines read it (free at each tick), where FRET computes it from
+    the variables its definition reads, and so does ``fretc audit`` replaying the trace."""
+    from fretc.check.streams import streams_of_entry
+
+    found: dict[str, Any] = {}
+    readers: dict[str, list[str]] = {}
+    for c in compiled:
+        f = c.formalization
+        if f is None:
+            continue
+        for n, st in streams_of_entry(c.entry, f.variables).items():
+            found.setdefault(n, st)
+            readers.setdefault(n, []).append(c.id)
+    return [f"{n} (read by {', '.join(readers[n])}) is a FRET stream variable (its "
+            f"definition {st.text} reads " + (", ".join(st.reads) or "no variable")
+            + " now and through pre): the tests give it values of their own at each tick "
+            "(its column), where fretc audit computes it from the columns of those "
+            "variables, so a test's expected verdict of a requirement reading it may not "
+            "be the audit's; leave such requirements out (--exclude) or compare only "
+            "those that do not read it" for n, st in sorted(found.items())]
 
 
 def _refuse_replacing_inputs(files: tuple[str, ...], bindings_file: str | None, out_dir: str,
