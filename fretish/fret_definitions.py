@@ -10,8 +10,9 @@ free variable, why: a definition outside the subset, or one that reads itself (t
 ``pre``: ``psiAtZero`` is ``Psi -> if ... then Psi else pre psiAtZero``, a stream with state
 that no expression of the variables' present and past values without it writes), or that
 reads such a variable. Those streams with state are listed apart too (``streams``): the
-analyses keep them free, the audit and the runtime monitors compute them tick by tick
-(:mod:`fretc.fretish.fret_streams`). A Mode with a mode requirement (FRET's glossary: the condition under
+expansions keep them free (``fretc check`` gives a comparison reading one the role of the
+variables its definition reads: :mod:`fretc.check.streams`), the audit and the runtime
+monitors compute them tick by tick (:mod:`fretc.fretish.fret_streams`). A Mode with a mode requirement (FRET's glossary: the condition under
 which the component is in that mode, a FRETish condition) is that condition, so ``in M mode``
 is the intervals where it holds. The expansions are what ``fretc check``, ``fretc shield`` and ``fretc
 testgen`` analyse (:func:`fretc.fretish.fret_variables.with_fret_definitions`); the formulas

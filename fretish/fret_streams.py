@@ -4,8 +4,10 @@ tick by tick.
 An Internal variable whose Lustre definition reads itself through ``pre`` (FRET's LMCPS
 case study: ``psiAtZero`` is ``Psi -> if (hdg and not pre hdg) then Psi else pre
 psiAtZero``, the heading when the heading mode was last engaged) is no expression of the
-other variables' present and past values: the analyses (``fretc check``, ``fretc shield``)
-keep it free (:mod:`fretc.fretish.fret_definitions`). The audit and the runtime monitors
+other variables' present and past values: the expansions keep it free
+(:mod:`fretc.fretish.fret_definitions`); ``fretc check`` reads a comparison reading it as one
+reading the variables its definition reads through ``pre`` (:mod:`fretc.check.streams`),
+``fretc shield`` refuses it by name. The audit and the runtime monitors
 compute it, as a Lustre node does (the Lustre of Kind 2 / CoCoSpec that FRET generates):
 
 - at each tick, each variable of the system is its definition over this tick's values of
