@@ -146,11 +146,24 @@ def check_requirements(compiled: Sequence[Compiled], *, budget: Budget | None = 
             from fretc.check.witness import write_witnesses  # lazy: numpy, if asked
             assert witness_judge is not None  # (refused above)
             write_witnesses(checker, result, witness_dir, witness_judge)
+            _stream_witness_note(result, streams)
         _figures(checker, worker, result)
     finally:
         if own:
             worker.close()
     return result
+
+
+def _stream_witness_note(result: CheckResult, streams: dict[str, CheckStream]) -> None:
+    """The note of witnesses written for requirements reading FRET stream variables
+    (:mod:`fretc.check.streams`): their columns are the checks' free values."""
+    if streams and (result.witnesses or any(f.witness for f in result.findings)):
+        result.notes.append(
+            "the witnesses give the stream variable" + "s" * (len(streams) > 1) + " "
+            + ", ".join(sorted(streams)) + " values of their own (a column each, free at "
+            "each tick as the checks read them), where fretc audit replaying a witness "
+            "computes them from the columns of the variables their definitions read: its "
+            "verdicts may not be the expected ones")
 
 
 def _figures(checker: Checker, worker: SpotWorker, result: CheckResult) -> None:

@@ -150,3 +150,15 @@ def test_lmcps_autopilot_is_checked_with_its_stream_variables():
     assert "psiAtZero" not in words and "rollAtZero" not in words
     [auto] = [c for c in project["fret_components"] if c["component"] == "Autopilot"]
     assert auto["realizability"] == "unknown" and auto["exit_code"] == 1, auto
+
+
+def test_witnesses_of_a_stream_say_its_column_is_the_checks_own(tmp_path):
+    """The witness of a set reading a stream carries a column of the stream's free values;
+    a note says the audit replaying it computes the stream instead."""
+    path = _write(tmp_path, ["whenever latched ctrl shall immediately satisfy o"], [
+        _var("b", "Input", "boolean"), _var("o", "Output", "boolean"),
+        _var("latched", "Internal", "boolean", "b -> b or pre latched")])
+    code, doc = _check(path, "--witness-dir", str(tmp_path / "w"))
+    assert code == 0 and doc["witnesses"], doc
+    assert any(n.startswith("the witnesses give the stream variable latched values of their "
+                            "own") for n in doc["notes"]), doc["notes"]
