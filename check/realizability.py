@@ -86,7 +86,8 @@ def check_realizability(checker: Checker, result: CheckResult, inputs: Sequence[
     the variables its definition reads (the summary's ``streams``), a variable its
     definition reads declared neither is named with the stream reading it, and an answer
     won by the player a stream is given to is unknown (the stream is free to it at each
-    tick, where its definition fixes it).
+    tick, where its definition fixes it). A stream declared an input or an output is that
+    variable, as declared.
 
     Raises :class:`RealizabilityError` when a variable is declared both input and output.
     """
@@ -95,6 +96,8 @@ def check_realizability(checker: Checker, result: CheckResult, inputs: Sequence[
     if both:
         raise RealizabilityError("declared both input and output: " + ", ".join(both))
     streams = check_streams(checker.items) if streams is None else streams
+    # (a stream declared an input or output is that: read from the system, as it says)
+    streams = {n: s for n, s in streams.items() if n not in inputs and n not in outputs}
     roles, _ = stream_roles(streams, inputs, outputs)
     used = []
     for x in checker.items:

@@ -162,3 +162,15 @@ def test_witnesses_of_a_stream_say_its_column_is_the_checks_own(tmp_path):
     assert code == 0 and doc["witnesses"], doc
     assert any(n.startswith("the witnesses give the stream variable latched values of their "
                             "own") for n in doc["notes"]), doc["notes"]
+
+
+def test_a_stream_declared_an_input_is_that_input(tmp_path):
+    """``--inputs`` naming the stream itself (read from the system, as the shield's refusal
+    suggests): it is the environment's variable as declared, not its definition's."""
+    path = _write(tmp_path, ["ctrl shall always satisfy held > 1.0"], [
+        _var("b", "Input", "boolean"), _var("y", "Output", "double"),
+        _var("held", "Internal", "double", "y -> if b then y else pre held")])
+    code, doc = _check(path, "--inputs", "b,held", "--outputs", "y")
+    rz = doc["realizability"]
+    assert "streams" not in rz and rz["undeclared"] == [], rz
+    assert code == 1 and [g["realizable"] for g in rz["groups"]] == [False], doc
