@@ -191,8 +191,9 @@ def judged(plan: AuditPlan, r: RequirementPlan, v: Verdict, ticks: StreamTicks,
     decided(plan, r, v, ev.holds, ev, status, tick, ticks.n, lambda: ticks)
 
 
-def decided(plan: AuditPlan, r: RequirementPlan, v, holds: bool, ev, status: str,
-             st_tick: int | None, n: int, ticks: Callable[[], _Ticks | StreamTicks]) -> None:
+def decided(plan: AuditPlan, r: RequirementPlan, v: Verdict, holds: bool,
+            ev: Evidence | None, status: str, st_tick: int | None, n: int,
+            ticks: Callable[[], _Ticks | StreamTicks]) -> None:
     """The verdict word of a decided requirement (``holds``), its vacuity's note, and a
     violation's evidence (:func:`_first_violation`, over the ticks ``ticks()`` gives)."""
     if holds:
