@@ -55,7 +55,7 @@ from fretc.logs import CsvSource
 from fretc.monitors.expressions import EvidenceUnsupported
 from fretc.monitors.interval import Evidence
 from fretc.monitors.interval_stream import IntervalStream, stream_unsupported
-from fretc.monitors.judge import Ltl3Stream
+from fretc.monitors.judge import Ltl3Stream, compared_exprs
 from fretc.monitors.nan import nan_ticks_of
 from fretc.monitors.robustness import RobustnessStream, RobustnessSummary
 from fretc.monitors.vectorized import VectorizeError, supports
@@ -150,9 +150,7 @@ def _streams_of(r: RequirementPlan) -> _Streams | str:
         ltl3 = None if r.offline else Ltl3Stream(r.monitor_source)
     except (EvidenceUnsupported, VectorizeError) as exc:
         return str(exc)
-    exprs = [req.scope.mode, req.condition.expr, req.timing.stop, req.response]
-    exprs += [p.expr for p in req.condition.parts]
-    return _Streams(r, tuple(r.variables), [e for e in exprs if e is not None], interval,
+    return _Streams(r, tuple(r.variables), compared_exprs(req), interval,
                     rob, ltl3)
 
 

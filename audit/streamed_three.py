@@ -64,6 +64,7 @@ from fretc.monitors.expressions import EvidenceUnsupported
 from fretc.monitors.interval import Evidence
 from fretc.monitors.completions import TooManyStates
 from fretc.monitors.completions_stream import CompletionsStream, completions_unsupported
+from fretc.monitors.judge import compared_exprs
 from fretc.monitors.kleene_stream import KleeneStream, Ltl3SetStream
 from fretc.monitors.nan import nan_ticks_of
 from fretc.monitors.vectorized import VectorizeError
@@ -160,9 +161,7 @@ def _three_of(r: RequirementPlan) -> _Three | str:
                 else Ltl3SetStream(r.monitor_source))
     except (EvidenceUnsupported, VectorizeError) as exc:
         return str(exc)
-    exprs = [req.scope.mode, req.condition.expr, req.timing.stop, req.response]
-    exprs += [p.expr for p in req.condition.parts]
-    return _Three(r, tuple(r.variables), [e for e in exprs if e is not None], kleene,
+    return _Three(r, tuple(r.variables), compared_exprs(req), kleene,
                   definite, ltl3)
 
 

@@ -27,9 +27,9 @@ cross-check them, the vectorized pt engine and this judge on random traces.
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -46,7 +46,8 @@ if TYPE_CHECKING:
     from fretc.compiler.semantics import Formalization
     from fretc.compiler.codegen import MonitorSource
 
-__all__ = ["Judgement", "Ltl3Stream", "judge", "ltl3_verdict", "ltl3_verdicts", "nan_ticks"]
+__all__ = ["Judgement", "Ltl3Stream", "judge", "ltl3_verdict", "ltl3_verdicts", "nan_ticks",
+           "earliest_verdict", "compared_exprs"]
 
 
 @dataclass
@@ -311,13 +312,22 @@ class Ltl3Stream:
     def finish(self) -> tuple[str, int | None, int | None]:
         """``(verdict, tick, time)``: :func:`ltl3_verdict`'s verdict and tick over the ticks
         fed, and the time of the tick (ns, as fed; None with the tick)."""
-        if self.decided is not None:
-            return self.decided, None, None
-        best: tuple[str, int | None, int | None] = ("unknown", None, None)
-        for run in self.live:
-            if run.hit is not None and (best[1] is None or run.hit < best[1]):
-                best = (run.outcome, run.hit, run.hit_time)
-        return best
+        return earliest_verdict(self.decided, self.live)
+
+
+def earliest_verdict(decided: str | None, runs: Iterable[Any]
+                     ) -> tuple[str, int | None, int | None]:
+    """The LTL3 verdict of automata run over a trace: ``decided`` when one was empty (a
+    verdict before any tick), else the outcome of the earliest rejection among ``runs``
+    (each with ``outcome``, ``hit`` and ``hit_time``, ``hit`` None while not rejected; the
+    first of them on a tie: ``bad`` before ``good``), else ``("unknown", None, None)``."""
+    if decided is not None:
+        return decided, None, None
+    best: tuple[str, int | None, int | None] = ("unknown", None, None)
+    for run in runs:
+        if run.hit is not None and (best[1] is None or run.hit < best[1]):
+            best = (run.outcome, run.hit, run.hit_time)
+    return best
 
 
 @dataclass
@@ -389,6 +399,13 @@ def nan_ticks(requirement: A.Requirement, columns: Mapping[str, np.ndarray], n: 
     A free-form requirement has none."""
     if requirement.freeform:
         return np.zeros(n, dtype=np.bool_)
-    exprs = [requirement.scope.mode, requirement.condition.expr, requirement.timing.stop,
-             requirement.response] + [p.expr for p in requirement.condition.parts]
-    return nan_ticks_of([e for e in exprs if e is not None], columns, n)
+    return nan_ticks_of(compared_exprs(requirement), columns, n)
+
+
+def compared_exprs(req: A.Requirement) -> list[A.Expr]:
+    """The expressions of ``req`` whose comparisons a NaN leaves unread, each read as a
+    condition: the scope mode, the condition (and each part of a compound one), the stop
+    condition and the response, those it has (FRET's requirement fields)."""
+    exprs = [req.scope.mode, req.condition.expr, req.timing.stop, req.response]
+    exprs += [p.expr for p in req.condition.parts]
+    return [e for e in exprs if e is not None]

@@ -36,6 +36,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from fretc.compiler.ir import Node, walk
+from fretc.monitors.judge import earliest_verdict
 from fretc.monitors.robustness import _Rho, chunkable
 from fretc.monitors.three_valued import ThreeValued, _letters
 from fretc.monitors.vectorized import VectorizeError, supports
@@ -251,13 +252,7 @@ class Ltl3SetStream:
     def finish(self) -> tuple[str, int | None, int | None]:
         """``(verdict, tick, time)`` over the ticks fed (``"unknown"``, None, None when no
         automaton rejected every run)."""
-        if self.decided is not None:
-            return self.decided, None, None
-        best: tuple[str, int | None, int | None] = ("unknown", None, None)
-        for run in self.live:
-            if run.hit is not None and (best[1] is None or run.hit < best[1]):
-                best = (run.outcome, run.hit, run.hit_time)
-        return best
+        return earliest_verdict(self.decided, self.live)
 
 
 def _run(run: _Sets, known: np.ndarray, free: np.ndarray) -> int | None:
