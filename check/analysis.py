@@ -156,14 +156,15 @@ def check_requirements(compiled: Sequence[Compiled], *, budget: Budget | None = 
 
 def _stream_witness_note(result: CheckResult, streams: dict[str, CheckStream]) -> None:
     """The note of witnesses written for requirements reading FRET stream variables
-    (:mod:`fretc.check.streams`): their columns are the checks' free values."""
+    (:mod:`fretc.check.streams`): their columns are computed from the variables their
+    definitions read (:mod:`fretc.check.stream_rows`), as the audit computes them."""
     if streams and (result.witnesses or any(f.witness for f in result.findings)):
         result.notes.append(
-            "the witnesses give the stream variable" + "s" * (len(streams) > 1) + " "
-            + ", ".join(sorted(streams)) + " values of their own (a column each, free at "
-            "each tick as the checks read them), where fretc audit replaying a witness "
-            "computes them from the columns of the variables their definitions read: its "
-            "verdicts may not be the expected ones")
+            "the witnesses' columns of the stream variable" + "s" * (len(streams) > 1) + " "
+            + ", ".join(sorted(streams)) + " are computed from the columns of the variables "
+            "their definitions read, as fretc audit computes them again when it replays a "
+            "witness (the checks read a comparison reading one as an independent "
+            "proposition: a finding whose witness does not show it says so)")
 
 
 def _figures(checker: Checker, worker: SpotWorker, result: CheckResult) -> None:

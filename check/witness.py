@@ -42,6 +42,7 @@ import numpy as np
 
 from fretc.check.atom_values import concrete_rows, free_atoms
 from fretc.check.solver import UNKNOWN
+from fretc.check.stream_rows import trace_streams, with_stream_columns, with_stream_inputs
 from fretc.common.outputs import output_folder, write_file
 from fretc.common.textsafe import csv_line
 from fretc.compiler import ir
@@ -101,7 +102,11 @@ def finite_trace(checker: Checker, formulas: Sequence[Node], columns: dict[str, 
     """A finite trace meeting the ft ``formulas`` (list of rows ``{variable: value}`` over
     ``columns``, name -> ``"bool"``/``"float"``), None when there is none, or UNKNOWN.
     ``length``: exactly that many ticks. Comparisons of one variable with constants get
-    the numeric abstraction's numbers, the others z3's (:mod:`fretc.check.atom_values`)."""
+    the numeric abstraction's numbers, the others z3's (:mod:`fretc.check.atom_values`).
+    A FRET stream variable the formulas read (:mod:`fretc.check.stream_rows`) has its
+    inputs as columns too, and its column is computed from them as the audit computes it."""
+    streams = trace_streams(checker.items, columns)
+    columns = with_stream_inputs(columns, streams)
     got = None
     if checker.uses_smt(formulas):  # past Spot's bounds: the pt monitors, when they take it
         got = checker.monitor_word(formulas, finite=True, length=length)
@@ -128,7 +133,7 @@ def finite_trace(checker: Checker, formulas: Sequence[Node], columns: dict[str, 
             else:
                 row[name] = numbers.get(name, 0.0)
         rows.append(row)
-    return concrete_rows(rows, letters, free_atoms(formulas))
+    return concrete_rows(rows, letters, free_atoms(formulas, streams), streams)
 
 
 def _spot_trace(checker, formulas: Sequence[Node], length: int | None):
@@ -291,7 +296,7 @@ def _controller_run(w: _Witnesses, finding, path: Path) -> None:
     effort (:mod:`fretc.check.safety_game`); some requirement of the set is violated whatever
     the controller does, so on this run too."""
     blank = {name: (False if kind == "bool" else 0.0) for name, kind in w.cols.items()}
-    rows = [{**blank, **r} for r in finding.details["run"]]
+    rows = with_stream_columns([{**blank, **r} for r in finding.details["run"]], w.streams)
     expected = expected_verdicts(w.items, rows, w.judge)
     _write(path, finding.message, w.sources, rows, expected)
     finding.witness = str(path)
@@ -313,7 +318,8 @@ class _Witnesses:
         self.judge = judge
         self.items = checker.items
         self.by_id = {x.id: x for x in self.items}
-        self.cols = _columns(self.items)
+        self.streams = trace_streams(self.items, _columns(self.items))
+        self.cols = with_stream_inputs(_columns(self.items), self.streams)
         self.sources: list[str] = []
         for x in self.items:
             if x.compiled.entry.source not in self.sources:
@@ -354,9 +360,11 @@ class _Witnesses:
             if part in (None, UNKNOWN):
                 continue  # left at false / 0
             own = {v for x in comp for v in x.variables}
+            own |= {i for s in (self.streams.systems if self.streams else ())
+                    if own & set(s.names) for i in s.inputs}
             for r, p in zip(rows, part):
                 r.update({k: v for k, v in p.items() if k in own})
-        return rows
+        return with_stream_columns(rows, self.streams)
 
     def plans(self, finding) -> list:
         """(formula variants, intended verdicts) that would show ``finding``, best first."""

@@ -23,15 +23,69 @@ Where the parts of a requirement are unknown is :mod:`fretc.monitors.unknowns`'s
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
+from typing import Any
 
 import numpy as np
 
+from fretc.compiler.ir import Node
 from fretc.fretish import ast as A
 from fretc.monitors.interval import Evidence, Violation, scope_of, trigger_points
 from fretc.monitors.unknowns import Unknowns
 
-__all__ = ["definite_evidence"]
+__all__ = ["definite_evidence", "verdict_under_nan", "nan_rule_judge"]
+
+
+def nan_rule_judge(compiled: Any) -> Callable[..., str]:
+    """A :data:`fretc.check.witness.Judge` (``judge(requirement, columns, n,
+    duration_ticks)``) giving :func:`verdict_under_nan` for the requirements of
+    ``compiled`` (:class:`fretc.compiler.build.Compiled`, their pt formulas found by the
+    requirement), the interval verdict for another: the expected verdicts ``fretc check``
+    writes in its witnesses are the audit's, a comparison reading NaN included."""
+    pts = {}
+    for c in compiled:
+        f = getattr(c, "formalization", None)
+        if f is not None and c.requirement is not None:
+            pts[c.requirement] = f.pt
+
+    def judge(req: A.Requirement, columns: Mapping[str, np.ndarray], n: int,
+              duration_ticks: int | None) -> str:
+        return verdict_under_nan(req, pts.get(req), columns, n, duration_ticks)
+
+    return judge
+
+
+def verdict_under_nan(req: A.Requirement, pt: Node | None, columns: Mapping[str, np.ndarray],
+                      n: int, duration_ticks: int | None) -> str:
+    """The audit's verdict of ``req`` on a finite trace of ``n`` ticks (``columns``: FRET
+    variable -> array of ``n`` values; ``pt`` its pt formula, ``duration_ticks`` as
+    ``Formalization.ticks``) under fretc's NaN rule: a comparison that reads NaN is unknown
+    at its tick (:func:`fretc.monitors.judge.nan_ticks`), and the verdict is the one every
+    completion of those ticks agrees on (module docstring), else ``"unknown"``; with no
+    NaN tick, FRET's interval verdict (:func:`fretc.monitors.interval.verdict_of`).
+    ``"unknown"`` too when the interval semantics cannot evaluate ``req``, or it reads NaN
+    and has no pt formula or one past the completions' bounds. What ``fretc testgen``
+    writes as a test's expected verdict, so that it is the audit's."""
+    from fretc.monitors.completions import decide
+    from fretc.monitors.interval import EvidenceUnsupported, evaluate_requirement, verdict_of
+    from fretc.monitors.judge import nan_ticks
+    from fretc.monitors.three_valued import ThreeValued
+    from fretc.monitors.vectorized import VectorizeError
+
+    if not nan_ticks(req, columns, n).any():
+        return verdict_of(req, columns, n, duration_ticks)
+    if pt is None:
+        return "unknown"
+    try:
+        holds, _pair, _why = decide(pt, ThreeValued(columns, {}, n, True))
+        if holds is not True:
+            return "violated" if holds is False else "unknown"
+        parts = Unknowns.of(req, {}, columns, n, True)
+        ev = evaluate_requirement(req, columns, n, duration_ticks, favour=parts)
+    except (EvidenceUnsupported, VectorizeError):
+        return "unknown"
+    return "vacuous" if definite_evidence(req, ev, parts, columns).triggers == 0 \
+        else "satisfied"
 
 
 def definite_evidence(req: A.Requirement, ev: Evidence, u: Unknowns,

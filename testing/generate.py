@@ -44,6 +44,7 @@ from fretc.common.textsafe import csv_line, visible
 from fretc.check.checker import Checker
 from fretc.check.items import CheckItem, make_item
 from fretc.check.solver import UNKNOWN, SpotWorker
+from fretc.check.stream_rows import trace_streams, with_stream_inputs
 from fretc.check.witness import finite_trace, trace_columns
 from fretc.compiler import ir
 from fretc.compiler.build import Compiled
@@ -53,6 +54,7 @@ from fretc.fretish import ast as A
 from fretc.logs.csv.source import SAMPLED_MARK, column_name_problem
 from fretc.monitors.coverage import exercised
 from fretc.monitors.interval import verdict_of
+from fretc.monitors.judge3 import verdict_under_nan
 
 __all__ = ["Generated", "TestCase", "generate", "column_kinds", "expected_of", "covered_by",
            "separating_trace", "Finder", "SPURIOUS", "write_tests"]
@@ -109,8 +111,11 @@ Accept = Callable[[list[dict[str, Any]]], bool]
 def column_kinds(compiled: Sequence[Compiled]) -> dict[str, str]:
     """FRET variable -> ``"bool"`` or ``"float"`` over the ft formulas of ``compiled``, in
     order of first use (:func:`fretc.check.witness.trace_columns`: a variable used as a
-    number anywhere is ``float``; an uninterpreted function is its own column)."""
-    return trace_columns([_formal(c)[1].ft for c in compiled])
+    number anywhere is ``float``; an uninterpreted function is its own column), then the
+    variables the FRET stream variables they read are computed from
+    (:func:`fretc.check.stream_rows.with_stream_inputs`)."""
+    cols = trace_columns([_formal(c)[1].ft for c in compiled])
+    return with_stream_inputs(cols, trace_streams(compiled, cols))
 
 
 def _columns(rows: list[dict[str, Any]], kinds: dict[str, str]) -> dict[str, np.ndarray]:
@@ -121,12 +126,13 @@ def _columns(rows: list[dict[str, Any]], kinds: dict[str, str]) -> dict[str, np.
 def expected_of(compiled: Sequence[Compiled], rows: list[dict[str, Any]], kinds: dict[str, str]
                 ) -> dict[str, str]:
     """The audit's verdict of every requirement of ``compiled`` on ``rows``
-    (:func:`fretc.monitors.interval.verdict_of`)."""
+    (:func:`fretc.monitors.judge3.verdict_under_nan`: FRET's interval verdict, under
+    fretc's NaN rule where a comparison reads NaN, as ``x / 0`` does)."""
     cols = _columns(rows, kinds)
     out = {}
     for c in compiled:
         req, f = _formal(c)
-        out[c.id] = verdict_of(req, cols, len(rows), f.ticks)
+        out[c.id] = verdict_under_nan(req, f.pt, cols, len(rows), f.ticks)
     return out
 
 
@@ -145,6 +151,15 @@ def covered_by(compiled: Sequence[Compiled], obs: dict[str, list[Obligation]],
         got = exercised(mine, req, cols, len(rows), f.ticks)
         out.extend((c.id, o.id, e.tick) for o, e in zip(mine, got) if e.met)
     return out
+
+
+def _audit_agrees(req: A.Requirement, f: Formalization, cols: dict[str, np.ndarray],
+                  n: int) -> bool:
+    """Whether the audit's verdict of ``req`` on the trace (under fretc's NaN rule) is the
+    interval verdict an obligation is judged by: a trace whose obligation rests on a
+    comparison reading NaN (``x / 0``) is not confirmed."""
+    return (verdict_under_nan(req, f.pt, cols, n, f.ticks)
+            == verdict_of(req, cols, n, f.ticks))
 
 
 def _variant(c: Compiled, req: A.Requirement, suffix: str) -> Compiled:
@@ -252,8 +267,9 @@ def _candidates(compiled: Sequence[Compiled], obs: dict[str, list[Obligation]],
                 def accept(rows: list[dict[str, Any]], c: Compiled = c,
                            ob: Obligation = ob) -> bool:
                     req, f = _formal(c)
-                    return exercised([ob], req, _columns(rows, kinds), len(rows),
-                                     f.ticks)[0].met
+                    cols, n = _columns(rows, kinds), len(rows)
+                    return exercised([ob], req, cols, n, f.ticks)[0].met and (
+                        _audit_agrees(req, f, cols, n))
 
                 try:
                     rows, engine = finder.find(c, ob, accept)

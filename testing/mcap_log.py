@@ -389,10 +389,12 @@ def bind_tests(gen: Generated, compiled: Sequence[Compiled], bindings: Bindings,
     (``adjusted``, module docstring) becomes the trace read back from its log: its
     ``covers`` and ``expected`` are the audit's again on it, and it is kept only if it still
     exercises every obligation it covered (else no log, and the reason)."""
+    from fretc.check.stream_rows import trace_streams, with_stream_columns
     from fretc.testing.generate import column_kinds, covered_by, expected_of
 
     out = Path(output_folder(out_dir))
     kinds = column_kinds([c for c in compiled if c.formalization is not None])
+    streams = trace_streams(compiled, kinds)
     limits = thresholds(compiled)
     for k, t in enumerate(gen.tests, 1):
         name = f"T{k:02d}.mcap"
@@ -401,7 +403,8 @@ def bind_tests(gen: Generated, compiled: Sequence[Compiled], bindings: Bindings,
         if rows is None:
             t.log, t.log_why, t.adjusted = None, why, []
             continue
-        if adjusted:
+        if adjusted:  # (a stream variable computed again from the values the log gives)
+            rows = with_stream_columns(rows, streams)
             covers = covered_by(compiled, gen.obligations, rows, kinds)
             lost = sorted({(r, o) for r, o, _ in t.covers} - {(r, o) for r, o, _ in covers})
             if lost:

@@ -263,9 +263,9 @@ def _checked(rs: Any, ins: list[str] | None, outs: list[str] | None, settings: _
 
     compiled = compile_entries(rs.entries)
     judge = None
-    if witness_dir is not None:  # the witnesses' expected verdicts: the audit's evidence
-        from fretc.monitors.interval import verdict_of
-        judge = verdict_of
+    if witness_dir is not None:  # the witnesses' expected verdicts: the audit's
+        from fretc.monitors.judge3 import nan_rule_judge
+        judge = nan_rule_judge(compiled)
     with settings.progress or contextlib.nullcontext():
         result = check_requirements(
             compiled, budget=settings.budget, mus_budget=settings.mus_budget,

@@ -128,9 +128,9 @@ def testgen_cmd(files: tuple[str, ...], out_dir: str, with_pytest: bool, binding
 def _stream_notes(compiled: list[Any]) -> list[str]:
     """One note per FRET stream variable the requirements ``compiled`` read (an Internal
     variable whose Lustre definition reads itself through ``pre``:
-    :mod:`fretc.check.streams`): the tests give it values of their own at each tick (its
-    column), as check's engines read it (free at each tick), where FRET computes it from
-    the variables its definition reads, and so does ``fretc audit`` replaying the trace."""
+    :mod:`fretc.check.streams`): each test's column of it is computed from the variables
+    its definition reads (:mod:`fretc.check.stream_rows`), as FRET and ``fretc audit``
+    replaying the trace compute it."""
     from fretc.check.streams import streams_of_entry
 
     found: dict[str, Any] = {}
@@ -144,11 +144,9 @@ def _stream_notes(compiled: list[Any]) -> list[str]:
             readers.setdefault(n, []).append(c.id)
     return [f"{n} (read by {', '.join(readers[n])}) is a FRET stream variable (its "
             f"definition {st.text} reads " + (", ".join(st.reads) or "no variable")
-            + " now and through pre): the tests give it values of their own at each tick "
-            "(its column), where fretc audit computes it from the columns of those "
-            "variables, so a test's expected verdict of a requirement reading it may not "
-            "be the audit's; leave such requirements out (--exclude) or compare only "
-            "those that do not read it" for n, st in sorted(found.items())]
+            + " now and through pre): each test's column of it is computed from the "
+            "columns of those variables, as fretc audit computes it again when it replays "
+            "the test" for n, st in sorted(found.items())]
 
 
 def _refuse_replacing_inputs(files: tuple[str, ...], bindings_file: str | None, out_dir: str,
