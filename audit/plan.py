@@ -125,7 +125,7 @@ def _with_definitions(entries: list, bindings: Bindings | None, notes: list[str]
         if not getattr(e, "variables", ()) or e.requirement is None:
             out.append(e)
             continue
-        defs = definitions(tuple(e.variables))
+        defs = definitions(tuple(e.variables), since=False)  # (streams tick by tick)
         read = names_read([e])
         used = sorted(n for n in read if n in defs.values and n not in bound)
         if used or any(n in defs.streams and n not in bound for n in read):

@@ -5,7 +5,9 @@ case study: ``psiAtZero`` is ``Psi -> if (hdg and not pre hdg) then Psi else pre
 psiAtZero``, the heading when the heading mode was last engaged) is a value computed each
 tick from the variables its definition reads, now and at earlier ticks
 (:mod:`fretc.fretish.fret_streams`), as FRET's realizability reads an Internal variable: its
-definition. No expression of those variables' present values writes it, so the analyses
+definition. A boolean stream monotone in its previous value (a latch) is exactly a
+past-time formula of them, which the analyses read (:mod:`fretc.fretish.fret_since`): it is
+no stream here. Of the others, no expression of those variables' present values writes it, so the analyses
 read a comparison that reads it as they read a comparison reading a previous value
 (``preReal``): an independent proposition at each tick (an ``abstraction`` note names the
 stream), whose role in realizability is that of the variables its definition reads, by the
@@ -41,18 +43,24 @@ class CheckStream:
     """One stream variable a requirement reads: ``name``; ``reads`` the variables its
     definition reads from outside the streams (sorted; the inputs of
     :class:`fretc.fretish.fret_streams.StreamSystem`, through the streams it reads);
-    ``text`` its definition as FRET wrote it."""
+    ``text`` its definition as FRET wrote it; ``boolean`` whether it is a truth value (a
+    boolean stream here is one not monotone in its previous value, or reading one: those
+    that are, the analyses read as past-time formulas, :mod:`fretc.fretish.fret_since`),
+    else a real number."""
 
     name: str
     reads: tuple[str, ...]
     text: str
+    boolean: bool = False
 
 
 def streams_of_entry(entry: Any, names: Iterable[str]) -> dict[str, CheckStream]:
     """The stream variables among ``names`` (variables a requirement reads) of the FRET
     export of ``entry`` (:class:`fretc.fretish.entry.RequirementEntry`; none without FRET
     variables), by name (:func:`fretc.fretish.fret_streams.stream_system`, one system per
-    stream so that each has its own ``reads``)."""
+    stream so that each has its own ``reads``). A boolean stream monotone in its previous
+    value is none of them: the analyses read it as its past-time formula, exactly
+    (:func:`fretc.fretish.fret_definitions.definitions`' ``pasts``)."""
     from fretc.fretish.fret_definitions import definitions
     from fretc.fretish.fret_streams import stream_system
 
@@ -65,7 +73,8 @@ def streams_of_entry(entry: Any, names: Iterable[str]) -> dict[str, CheckStream]
         system = stream_system(variables, [n])
         if system is None:  # pragma: no cover - a name of ``streams`` has a system
             continue
-        out[n] = CheckStream(n, system.inputs, system.texts[system.names.index(n)])
+        k = system.names.index(n)
+        out[n] = CheckStream(n, system.inputs, system.texts[k], system.booleans[k])
     return out
 
 

@@ -10,6 +10,7 @@ the response, condition, stop and scope expressions of a requirement.
 from __future__ import annotations
 
 from fretc.fretish import ast as A
+from fretc.fretish.fret_since import SINCE
 from fretc.common.errors import FretishError
 from fretc.fretish.limits import MAX_DURATION_TICKS, duration_too_long
 
@@ -41,7 +42,8 @@ _NUMERIC_FUNCS = {"absReal", "absInt", "minReal", "minInt", "maxReal", "maxInt",
 #: FRET's numeric functions and their arities (absReal(x), maxReal(x, y), ...).
 _NUMERIC_ARITY = {"absReal": 1, "absInt": 1, "minReal": 2, "minInt": 2, "maxReal": 2,
                   "maxInt": 2}
-_PAST_FUNCS = {"persisted", "occurred", "preBool", "prevOcc", "preInt", "preReal"}
+#: (SINCE: a FRET stream monotone in its previous value, :mod:`fretc.fretish.fret_since`)
+_PAST_FUNCS = {"persisted", "occurred", "preBool", "prevOcc", "preInt", "preReal", SINCE}
 _FUTURE_FUNCS = {"persists", "occurs", "nextOcc"}
 
 
@@ -157,7 +159,9 @@ class Expander:
         """FRET's past-time functions (../shared/fretish/README.md section 6b, FRET's
         expansions restated): persisted(m,n,p) = H[m,n] p & H[0,n-1] !Left; occurred(n,p) =
         ((!Left) S p) & O[0,n] p; occurred(m,n,p) = (!Left) S[m,n] p; preBool(b,p) = (FTP &
-        b) | (Y p); prevOcc(p,q) = Left | Y(((!Left & !p) S p) -> ((!Left & !p) S (p & q))).
+        b) | (Y p); prevOcc(p,q) = Left | Y(((!Left & !p) S p) -> ((!Left & !p) S (p & q)));
+        a FRET stream monotone in its previous value, SINCE(a, c) = a S c over the whole
+        trace, as Lustre computes it (:mod:`fretc.fretish.fret_since`).
         Endpoint-free forms inside scope conditions: H[m,n] p, O[m,n] p, Y((!p) S (p & q))."""
         # same shape as _future_function below: FRET's past functions mirror its future ones (kept:
         # other operators, H/O/S/Y here)
@@ -185,6 +189,8 @@ class Expander:
                     "'undefined' here)", getattr(init, "span", e.span))
             p = px.bool(args[1])
             return or_(and_(FTP, ir.const(init.value)), and_(not_(FTP), Y(p)))
+        if name == SINCE and len(args) == 2:  # (the trace's own since: no Left, no scope)
+            return S(px.bool(args[0]), px.bool(args[1]))
         if name == "prevOcc":
             if len(args) != 2:
                 raise SemanticsError("prevOcc takes (p, q)", e.span)

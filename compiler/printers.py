@@ -8,7 +8,8 @@
   atoms that are not plain identifiers (comparisons, calls, derived past atoms, ``LAST``)
   become double-quoted atomic propositions. Spot has no past operators: a pt formula raises
   ``ValueError``.
-* :func:`expr_text` - a FRETish AST expression in FRET's printed form (for derived atoms).
+* :func:`expr_text` - a FRETish AST expression in FRET's printed form (for derived atoms;
+  a stream read as a since, :mod:`fretc.fretish.fret_since`, prints ``(a S c)``).
 """
 
 from __future__ import annotations
@@ -17,6 +18,7 @@ import functools
 import re
 
 from fretc.fretish import ast as A
+from fretc.fretish.fret_since import SINCE
 from fretc.fretish.words import FRET_RESERVED, RESERVED_LETTERS, RESERVED_WORDS
 
 from fretc.compiler.ir import Node, name_of
@@ -187,6 +189,8 @@ def expr_text(e: A.Expr) -> str:
         return f"(! {expr_text(e.operand)})" if e.op == "!" else f"(- {expr_text(e.operand)})"
     if isinstance(e, A.Binary):
         return f"({expr_text(e.left)} {e.op} {expr_text(e.right)})"
+    if isinstance(e, A.Call) and e.name == SINCE and len(e.args) == 2:
+        return f"({expr_text(e.args[0])} S {expr_text(e.args[1])})"  # (FRET's pt since)
     if isinstance(e, A.Call):
         return f"{mangle(e.name)}({','.join(expr_text(a) for a in e.args)})"
     raise TypeError(type(e))

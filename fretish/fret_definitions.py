@@ -10,7 +10,9 @@ free variable, why: a definition outside the subset, or one that reads itself (t
 ``pre``: ``psiAtZero`` is ``Psi -> if ... then Psi else pre psiAtZero``, a stream with state
 that no expression of the variables' present and past values without it writes), or that
 reads such a variable. Those streams with state are listed apart too (``streams``): the
-expansions keep them free (``fretc check`` gives a comparison reading one the role of the
+expansions keep them free, except a boolean one monotone in its own previous value (a
+latch: ``false -> (enter or (pre m and not exit))``), which is exactly the past-time formula
+``P S psi`` and is expanded so (:mod:`fretc.fretish.fret_since`) (``fretc check`` gives a comparison reading one the role of the
 variables its definition reads: :mod:`fretc.check.streams`), the audit and the runtime
 monitors compute them tick by tick (:mod:`fretc.fretish.fret_streams`). A Mode with a mode requirement (FRET's glossary: the condition under
 which the component is in that mode, a FRETish condition) is that condition, so ``in M mode``
@@ -28,6 +30,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from fretc.fretish import ast as A
+from fretc.fretish.fret_since import reads_itself_monotonically, since_expansion
 from fretc.fretish.limits import MAX_EXPR_DEPTH, depth
 from fretc.fretish.lustre import LustreError, LustreTooDeep, parse_definition
 
@@ -63,19 +66,29 @@ class Definitions:
     reads itself or another of them through ``pre``, or reads one of them; each also in
     ``free``, which the analyses keep free) -> its definition as read (the variables it
     reads not expanded), in an order where each reads the earlier ones only outside ``pre``
-    (:mod:`fretc.fretish.fret_streams`)."""
+    (:mod:`fretc.fretish.fret_streams`); ``pasts``: the boolean streams monotone in their
+    previous value that ``values`` has as past-time formulas (:mod:`fretc.fretish.
+    fret_since`; with :func:`definitions`' ``since``)."""
 
     values: dict[str, A.Expr]
     free: dict[str, str]
     texts: dict[str, str]
     streams: dict[str, A.Expr] = dataclasses.field(default_factory=dict)
+    pasts: frozenset[str] = frozenset()
 
 
 @functools.lru_cache(maxsize=256)
-def definitions(variables: tuple[Any, ...]) -> Definitions:
+def definitions(variables: tuple[Any, ...], since: bool = True) -> Definitions:
     """The :class:`Definitions` of one component's FRET variables (a tuple of
     :class:`fretc.fretish.fret_variables.FretVariable`; those that are not Internal or have
-    no assignment are not definitions). Deterministic; memoized by the tuple."""
+    no assignment are not definitions). Deterministic; memoized by the tuple.
+
+    ``since`` (the analyses' reading): a boolean stream monotone in its own previous value
+    (:mod:`fretc.fretish.fret_since`) is its past-time formula ``P S psi``, in ``values``
+    with the definitions that read it, out of ``free`` and ``streams`` (named in
+    ``pasts``); without (the audit's and the runtime monitors' reading, which compute every
+    stream tick by tick) it is a stream like the others. The streams are those of the
+    reading without ``since`` in both (less the expanded ones)."""
     kinds = {v.name: v for v in variables}
 
     def is_boolean(name: str) -> bool:
@@ -107,9 +120,15 @@ def definitions(variables: tuple[Any, ...]) -> Definitions:
                             f"its definition is outside FRET's Lustre subset that fretc reads "
                             f"({exc})")
     values: dict[str, A.Expr] = {}
+    monotone = frozenset(n for n in raw if since and (is_boolean(n) or kinds[n].kind == "Mode")
+                         and reads_itself_monotonically(raw[n], n))
     for name in sorted(raw):
-        _expand(name, raw, values, free, ())
-    return Definitions(values, free, texts, _streams(raw, values, free))
+        _expand(name, raw, values, free, (), monotone)
+    if not since:
+        return Definitions(values, free, texts, _streams(raw, values, free))
+    ticked = definitions(variables, False).streams
+    return Definitions(values, free, texts, {n: e for n, e in ticked.items() if n not in values},
+                       frozenset(monotone & set(values)))
 
 
 def _mode(text: str, is_boolean: Any) -> A.Expr:
@@ -146,9 +165,12 @@ def _plain(e: Any) -> Any:
 
 
 def _expand(name: str, raw: dict[str, A.Expr], values: dict[str, A.Expr],
-            free: dict[str, str], stack: tuple[str, ...]) -> A.Expr | None:
+            free: dict[str, str], stack: tuple[str, ...],
+            monotone: frozenset[str] = frozenset()) -> A.Expr | None:
     """The expansion of ``name`` (memoized in ``values``), None when it stays free (the
-    reason recorded in ``free``)."""
+    reason recorded in ``free``); a name of ``monotone`` (a boolean stream monotone in its
+    previous value) reads itself as is, its expansion its past-time formula
+    (:func:`fretc.fretish.fret_since.since_expansion`)."""
     if name in values:
         return values[name]
     if name in free:
@@ -165,9 +187,9 @@ def _expand(name: str, raw: dict[str, A.Expr], values: dict[str, A.Expr],
     blocked: list[str] = []
 
     def var(v: A.Var) -> A.Expr:
-        if v.name not in raw:
+        if v.name not in raw or (v.name == name and name in monotone):
             return v
-        got = _expand(v.name, raw, values, free, (*stack, name))
+        got = _expand(v.name, raw, values, free, (*stack, name), monotone)
         if got is None:
             blocked.append(v.name)
             return v
@@ -180,6 +202,8 @@ def _expand(name: str, raw: dict[str, A.Expr], values: dict[str, A.Expr],
         free[name] = ("it reads " + ", ".join(sorted(set(blocked)))
                       + ", which fretc keeps free")
         return None
+    if name in monotone:
+        out = since_expansion(out, name)
     if _size(out) > MAX_EXPANSION_NODES:
         free[name] = f"its expansion has more than {MAX_EXPANSION_NODES} nodes"
         return None

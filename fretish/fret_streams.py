@@ -86,8 +86,9 @@ def stream_system(variables: tuple[Any, ...], reads: Iterable[str],
     (:class:`fretc.fretish.fret_variables.FretVariable`), None when ``reads`` has none.
     ``keep``: variables read from outside whatever FRET defines (the audit's bound ones);
     the other definitions a stream reads are expanded (:func:`fretc.fretish.
-    fret_definitions.definitions`)."""
-    defs = definitions(tuple(variables))
+    fret_definitions.definitions` without ``since``: a stream the analyses read as a
+    past-time formula, :mod:`fretc.fretish.fret_since`, is computed here as every other)."""
+    defs = definitions(tuple(variables), since=False)  # (every stream computed tick by tick)
     streams = {n: e for n, e in defs.streams.items() if n not in keep}
     values = {n: e for n, e in defs.values.items() if n not in keep}
     need = _closure({n for n in reads if n in streams}, streams)

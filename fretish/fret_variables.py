@@ -124,8 +124,10 @@ def with_fret_definitions(entry: Any, keep: Collection[str] = (), streams: bool 
     the stream variables it then reads (a definition reading itself through ``pre``) are
     its ``streams``, computed tick by tick from the variables they read
     (:func:`fretc.fretish.fret_streams.stream_system`). The entry itself when there is
-    none of either."""
-    values = {k: v for k, v in definitions(tuple(entry.variables)).values.items()
+    none of either. Without ``streams`` (the analyses), a boolean stream monotone in its
+    previous value is its past-time formula (:mod:`fretc.fretish.fret_since`), exact."""
+    # (the monitors compute every stream tick by tick: no since there)
+    values = {k: v for k, v in definitions(tuple(entry.variables), not streams).values.items()
               if k not in keep}
     req = entry.requirement
     if req is None or req.freeform:
@@ -171,6 +173,12 @@ def names_read(entries: Any) -> set[str]:
     return out
 
 
+#: what the notes say of a boolean stream monotone in its previous value, which the
+#: analyses read as its past-time formula (:mod:`fretc.fretish.fret_since`)
+PAST_NOTE = ("that definition is a stream with state monotone in its previous value: "
+             "exactly the past-time formula P S psi (P: the definition with its pre true, "
+             "psi: with its pre false, or its first value at the first tick)")
+
 #: how the analyses use a FRET definition (:func:`unused`'s sentence)
 ANALYSIS_USE = "in the analysis (the emitted formulas keep its name)"
 
@@ -190,12 +198,15 @@ def unused(variables: list[FretVariable] | tuple[FretVariable, ...], read: set[s
     analysis reads a stream variable instead (``fretc check``: a comparison reading it as
     one reading its definition's variables, after "that definition is a stream with state
     (...): "); either makes the variables a stream reads read."""
-    defs = definitions(tuple(variables))
+    defs = definitions(tuple(variables), not streams)
     read = _through_definitions(read, {**defs.values, **(defs.streams if streams or stream_use
                                                             else {})})
     out = []
     for v in sorted((v for v in variables if v.name in read), key=lambda v: v.name):
-        if v.kind == "Internal" and v.name in defs.values:
+        if v.name in defs.pasts:
+            out.append(f"{v.name}: FRET defines it ({v.kind}) as "
+                       f"{_short(v.assignment or v.mode_requirement)}; {PAST_NOTE}, {use}")
+        elif v.kind == "Internal" and v.name in defs.values:
             what = "constant" if constant_of(v) is not None else "definition"
             out.append(f"{v.name}: FRET defines it (Internal) as {_short(v.assignment)}; "
                        f"that {what} {use}")

@@ -21,6 +21,7 @@ from fretc.compiler.expressions import Expander, SemanticsError
 from fretc.compiler.ir import TRUE
 from fretc.compiler.printers import to_smv
 from fretc.fretish import ast as A
+from fretc.fretish.fret_since import SINCE
 
 from fretc.monitors.arrays import COMPARISONS, CONNECTIVES, arith, connective, py_max, py_min, shifted
 
@@ -240,7 +241,21 @@ class ColumnExpressions:
         if name in ("prevOcc", "nextOcc") and len(args) == 2:
             p, q = self.bool(args[0]), self.bool(args[1])
             return self._prev_occ(p, q) if name == "prevOcc" else self._next_occ(p, q)
+        if name == SINCE and len(args) == 2:
+            return self._since(self.bool(args[0]), self.bool(args[1]))
         return self.uninterpreted(e, numeric=False)
+
+    def _since(self, a: np.ndarray, c: np.ndarray) -> np.ndarray:
+        """``a S c`` over the whole trace (a FRET stream monotone in its previous value,
+        :mod:`fretc.fretish.fret_since`): ``c`` at some k <= t and ``a`` at every tick of
+        (k, t], i.e. the last ``c`` at or after the last ``!a``; false in the absorbing
+        state (a derived past atom)."""
+        i = self.idx
+        last_c = np.maximum.accumulate(np.where(c, i, -1))
+        last_not_a = np.maximum.accumulate(np.where(a, -1, i))
+        out = (last_c >= 0) & (last_c >= last_not_a)
+        out[self.n] = False
+        return out
 
     def _window(self, name: str, m: int, k: int, p: np.ndarray) -> np.ndarray:
         """``persisted``/``occurred``/``persists``/``occurs`` with bounds ``[m, k]``

@@ -58,6 +58,7 @@ from typing import Any
 import numpy as np
 
 from fretc.fretish import ast as A
+from fretc.fretish.fret_since import SINCE
 from fretc.monitors.expressions import ColumnExpressions, EvidenceUnsupported
 from fretc.monitors.interval import MAX_LISTED, Evidence, Violation, duration_of, favoured
 
@@ -66,7 +67,7 @@ __all__ = ["IntervalStream", "stream_unsupported", "NOT_POINTWISE"]
 #: FRET's temporal functions: their value at a tick reads other ticks (and the scope's
 #: ``Left``/``Right``), so a chunk alone cannot evaluate them.
 NOT_POINTWISE = ("persisted", "occurred", "persists", "occurs", "prevOcc", "nextOcc",
-                 "preBool", "preInt", "preReal")
+                 "preBool", "preInt", "preReal", SINCE)
 
 #: A global tick "not seen yet" (no such event so far, an interval still open).
 _INF = 1 << 62

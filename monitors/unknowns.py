@@ -18,11 +18,12 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from fretc.fretish import ast as A
+from fretc.fretish.fret_since import SINCE
 from fretc.monitors.nan import nan_ticks_of
 
 __all__ = ["Unknowns", "expression_unknown", "possible_trigger"]
 
-_PAST = ("persisted", "occurred", "prevOcc", "preBool", "preInt", "preReal")
+_PAST = ("persisted", "occurred", "prevOcc", "preBool", "preInt", "preReal", SINCE)
 _FUTURE = ("persists", "occurs", "nextOcc")
 #: scopes whose interval the mode's first occurrence places (monitors/interval.py, point 1)
 _FIRST_OCCURRENCE = ("before", "after", "onlyBefore", "onlyAfter")

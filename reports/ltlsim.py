@@ -29,6 +29,7 @@ from typing import Any
 import numpy as np
 
 from fretc.fretish import ast as A
+from fretc.fretish.fret_since import SINCE
 
 __all__ = ["MAX_TICKS", "MAX_BODY", "TraceError", "variables_of", "judge_trace",
            "make_server", "page_html"]
@@ -53,7 +54,7 @@ def _numeric_in(e: A.Expr | None, out: set[str]) -> None:
             out.add(node.operand.name)
         elif isinstance(node, A.Call) and node.name not in ("persisted", "occurred",
                                                             "persists", "occurs", "prevOcc",
-                                                            "nextOcc", "preBool"):
+                                                            "nextOcc", "preBool", SINCE):
             out.update(x.name for x in node.args if isinstance(x, A.Var))
 
 

@@ -211,7 +211,10 @@ def _refuse_streams(c: Any, undeclared: Sequence[str]) -> None:
     variables its definition reads and why: the shield's game and runtime step the
     requirements' monitors over the inputs and outputs of one tick, and hold no state of a
     stream (``fretc check`` reads such a comparison as an independent proposition, which
-    a shield cannot enforce).
+    a shield cannot enforce). The reason names the kind: a numeric stream is a stored real
+    number; a boolean one not monotone in its previous value is no past-time formula (one
+    that is, a latch, is its formula ``P S psi`` and is enforced:
+    :mod:`fretc.fretish.fret_since`).
 
     Raises:
         ShieldError: it reads one."""
@@ -221,13 +224,23 @@ def _refuse_streams(c: Any, undeclared: Sequence[str]) -> None:
     if not found:
         return
     said = "; ".join(f"{n} (its definition {s.text} reads "
-                     + (", ".join(s.reads) or "no variable") + " now and through pre)"
+                     + (", ".join(s.reads) or "no variable") + " now and through pre; "
+                     + (_NOT_PAST if s.boolean else _NUMERIC) + ")"
                      for n, s in found.items())
     raise ShieldError(f"{_where(c)}: {c.id} reads the FRET stream variable"
                       f"{'s' * (len(found) > 1)} {said}: the shield does not compute stream "
                       "variables (its machines step over one tick's inputs and outputs); "
                       "leave the requirement out (--exclude), or declare the variable an "
                       "input (--inputs) for the shield to read it from the system")
+
+
+#: why the shield cannot hold a numeric stream (:func:`_refuse_streams`)
+_NUMERIC = ("a numeric stream is a stored real number, a memory of a past value: no finite "
+            "game holds it")
+#: why the shield cannot hold a boolean stream it is given (a monotone one is a past-time
+#: formula, which the shield reads: :mod:`fretc.fretish.fret_since`)
+_NOT_PAST = ("a boolean stream not monotone in its previous value (or reading one) is no "
+             "past-time formula: the game would need state bits of its own for it")
 
 
 def _assumption(index: int, c: Any, inputs: Sequence[str], outputs: Sequence[str]

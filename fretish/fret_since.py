@@ -1,0 +1,168 @@
+"""FRET's boolean streams monotone in their own previous value, read as past-time formulas.
+
+A FRET Internal variable (or Mode) whose definition reads itself through ``pre`` is a stream
+with state (:mod:`fretc.fretish.fret_definitions`); most such boolean streams are latches:
+FRET's mode latch ``false -> (enter or (pre m and not exit))``, ``b -> b or pre latched``.
+Lustre's semantics (a node's equation computed at each instant; ``a -> b`` is ``a`` at the
+first instant, ``pre e`` the value of ``e`` one instant earlier, FRET's ``preBool(b, e)``
+being ``b`` at the first instant: :mod:`fretc.fretish.lustre`) makes such a stream ``s``,
+defined by ``D``, the sequence ``s_0 = D_0[pre s := b]``, ``s_t = D_t[pre s := s_(t-1)]``.
+
+When ``s`` occurs in ``D`` only as ``preBool(b, s)`` (``b`` a literal), each occurrence
+syntactically positive (under an even number of negations, never under ``xor``, ``<->``,
+``=``, ``!=``, a comparison, arithmetic, another ``pre`` or function, an ``ite``'s
+condition or the left of ``->``; an ``ite``'s branches are fine), ``D`` is a monotone
+function of its previous value ``x``: ``D = Q | (P & x)`` with ``Q = D[x := false]`` and
+``P = D[x := true]`` (Shannon's expansion of a monotone function). Then, for every trace,
+``s_t = Q_t | (P_t & s_(t-1))`` for ``t >= 1`` and ``s_0 = D0_0`` (``D0``: each occurrence
+replaced by its own first value), which is the recursion of the past-time *since*
+(pt-LTL as Havelund & Rosu, "Synthesizing monitors for safety properties", TACAS 2002, and
+FRET's pt formulas read it: ``(a S c)_t`` iff ``c_k`` at some ``k <= t`` and ``a_j`` at
+every ``j`` in ``(k, t]``, so ``(a S c)_t = c_t | (a_t & (a S c)_(t-1))``, false before
+the trace): ``s = P S psi`` with ``psi = Q | (FTP & D0)`` (``FTP`` the trace's first
+instant; ``D0`` implies ``Q`` is not needed: ``Q`` implies ``D0`` by monotonicity, so
+``psi`` is ``D0`` at the first instant and ``Q`` after). The mode latch is
+``(enter | !exit) S enter``; ``b -> b or pre latched`` is ``true S b``, FRET's ``once b``.
+
+:func:`since_expansion` builds that formula as the AST call :data:`SINCE` (``SINCE(P,
+psi)``), a name neither FRETish's grammar (a name starts with a letter) nor the Lustre
+reader (letters, digits and ``_``) produces, so no requirement or definition can write it;
+the compiler expands it to its IR since (:class:`fretc.compiler.expressions.Expander`: ``S``
+in pt, a derived ``past`` atom in ft, as FRET's other past-time functions) and prints it
+``(P S psi)`` (:func:`fretc.compiler.printers.expr_text`). A boolean stream that is not
+monotone in its previous value (a toggle ``false -> not pre t``: it counts modulo 2, no
+past-time formula of its inputs is it) and a numeric stream stay streams with state.
+"""
+
+from __future__ import annotations
+
+from fretc.fretish import ast as A
+
+__all__ = ["SINCE", "since_expansion", "reads_itself_monotonically"]
+
+#: the AST call name of the past-time since ``SINCE(a, c)`` = ``a S c`` (module docstring):
+#: no FRETish or Lustre text can produce it (``$`` starts no name of either)
+SINCE = "$since"
+
+#: the operators through which an occurrence keeps its polarity
+_KEEP = frozenset({"&", "|"})
+
+
+def reads_itself_monotonically(e: A.Expr, name: str) -> bool:
+    """Whether the definition ``e`` of the boolean stream ``name`` reads ``name`` at least
+    once, each time as ``preBool(b, name)`` with ``b`` a literal, at a syntactically
+    positive place (module docstring: Lustre's semantics makes ``e`` then a monotone
+    function of ``name``'s previous value). Iterative (definitions nest up to
+    :data:`fretc.fretish.limits.MAX_EXPR_DEPTH` levels)."""
+    found = False
+    stack: list[tuple[A.Expr, bool]] = [(e, True)]
+    while stack:
+        x, positive = stack.pop()
+        if _occurrence(x, name):
+            if not positive:
+                return False
+            found = True
+        elif isinstance(x, A.Unary) and x.op == "!":
+            stack.append((x.operand, not positive))
+        elif isinstance(x, A.Binary) and x.op in _KEEP:
+            stack += [(x.left, positive), (x.right, positive)]
+        elif isinstance(x, A.Binary) and x.op == "->":
+            if _mentions(x.left, name):
+                return False
+            stack.append((x.right, positive))
+        elif isinstance(x, A.Call) and x.name == "ite" and len(x.args) == 3:
+            if _mentions(x.args[0], name):
+                return False
+            stack += [(x.args[1], positive), (x.args[2], positive)]
+        elif _mentions(x, name):  # (anywhere else: xor, <->, a comparison, a call ...)
+            return False
+    return found
+
+
+def since_expansion(e: A.Expr, name: str) -> A.Expr:
+    """``SINCE(P, psi)`` (:data:`SINCE`), the past-time formula the definition ``e`` of the
+    boolean stream ``name`` is when :func:`reads_itself_monotonically` holds (module
+    docstring: ``P`` = ``e`` with each ``preBool(b, name)`` true, ``Q`` with each false,
+    ``psi`` = ``Q`` when every ``b`` is false, else ``Q | (FTP & D0)``, ``D0`` with each
+    occurrence its own ``b``). ``e`` may read other definitions, already expanded."""
+    def put(value: bool | None) -> A.Expr:
+        return _replaced(e, name, value)
+
+    q = put(False)
+    firsts = {_first(x, name) for x in A.walk(e)} - {None}
+    psi = q if firsts == {False} else A.Binary("|", q, A.Binary("&", A.Var("FTP"), put(None)))
+    return A.Call(SINCE, (put(True), psi))
+
+
+def _first(x: A.Expr, name: str) -> bool | None:
+    """``b`` when ``x`` is ``preBool(b, name)`` with ``b`` a literal, else None."""
+    if (isinstance(x, A.Call) and x.name == "preBool" and len(x.args) == 2
+            and isinstance(x.args[0], A.BoolLit) and isinstance(x.args[1], A.Var)
+            and x.args[1].name == name):
+        return x.args[0].value
+    return None
+
+
+def _occurrence(x: A.Expr, name: str) -> bool:
+    """Whether ``x`` is ``preBool(b, name)`` with ``b`` a literal."""
+    return _first(x, name) is not None
+
+
+def _mentions(e: A.Expr, name: str) -> bool:
+    return any(isinstance(x, A.Var) and x.name == name for x in A.walk(e))
+
+
+def _replaced(e: A.Expr, name: str, value: bool | None) -> A.Expr:
+    """``e`` with each ``preBool(b, name)`` replaced by the literal ``value`` (None: by its
+    own ``b``). Recursive to the definition's depth (bounded by the reader)."""
+    first = _first(e, name)
+    if first is not None:
+        return A.BoolLit(first if value is None else value)
+    if not _mentions(e, name):
+        return e
+    if isinstance(e, A.Unary):
+        return _folded(A.Unary(e.op, _replaced(e.operand, name, value)))
+    if isinstance(e, A.Binary):
+        return _folded(A.Binary(e.op, _replaced(e.left, name, value),
+                                _replaced(e.right, name, value)))
+    if isinstance(e, A.Call):
+        return _folded(A.Call(e.name, tuple(_replaced(a, name, value) for a in e.args)))
+    return e
+
+
+def _folded(e: A.Expr) -> A.Expr:
+    """``e`` (a node whose operands were just replaced) with a literal operand of ``!``,
+    ``&``, ``|``, ``->`` or an ``ite`` branch folded away (Boolean algebra's identities:
+    ``x & true`` is ``x``, ``x | true`` is ``true``, ...), so the formula reads as the
+    definition did: ``(enter | !exit) S enter``, not ``(enter | (true & !exit)) S ...``."""
+    lit = _literal
+    if isinstance(e, A.Unary) and e.op == "!" and lit(e.operand) is not None:
+        return A.BoolLit(not lit(e.operand))
+    if isinstance(e, A.Binary) and e.op in ("&", "|", "->"):
+        a, b = lit(e.left), lit(e.right)
+        absorbing = e.op == "|"  # (the value that decides alone: true for |, false for &)
+        if e.op == "->":
+            if a is False or b is True:
+                return A.BoolLit(True)
+            return e.right if a is True else (A.Unary("!", e.left) if b is False else e)
+        if a is not None:
+            return A.BoolLit(absorbing) if a is absorbing else e.right
+        if b is not None:
+            return A.BoolLit(absorbing) if b is absorbing else e.left
+    if isinstance(e, A.Call) and e.name == "ite" and len(e.args) == 3:
+        c, x, y = e.args
+        if x == y:
+            return x
+        if lit(c) is not None:
+            return x if lit(c) else y
+        if lit(x) is not None and lit(y) is not None:
+            return x if lit(x) == lit(y) else c if lit(x) else A.Unary("!", c)
+        if lit(x) is not None:  # ite(c, true, y) = c | y; ite(c, false, y) = !c & y
+            return A.Binary("|", c, y) if lit(x) else A.Binary("&", A.Unary("!", c), y)
+        if lit(y) is not None:  # ite(c, x, true) = !c | x; ite(c, x, false) = c & x
+            return A.Binary("|", A.Unary("!", c), x) if lit(y) else A.Binary("&", c, x)
+    return e
+
+
+def _literal(e: A.Expr) -> bool | None:
+    return e.value if isinstance(e, A.BoolLit) else None
