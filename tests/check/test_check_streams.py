@@ -40,13 +40,15 @@ def _write(tmp_path: Path, texts: list[str], variables: list[dict]) -> Path:
 
 
 def test_a_stream_read_by_one_requirement_takes_its_definitions_role(tmp_path):
-    """Two variables, ``b`` (Input) and ``o`` (Output), and ``latched`` := ``b -> b or pre
-    latched``: R1 is checked (not "declared neither"), ``latched`` is the environment's (its
+    """Two variables, ``b`` (Input) and ``o`` (Output), and ``latched`` := ``b -> (b xor pre
+    latched)`` (not monotone in its previous value: a stream for check; a monotone one is a
+    past-time formula, tests/check/test_check_since.py): R1 is checked (not "declared
+    neither"), ``latched`` is the environment's (its
     definition reads the input b), the controller answers it (o true), and the notes name
     the stream."""
     path = _write(tmp_path, ["whenever latched ctrl shall immediately satisfy o"], [
         _var("b", "Input", "boolean"), _var("o", "Output", "boolean"),
-        _var("latched", "Internal", "boolean", "b -> b or pre latched")])
+        _var("latched", "Internal", "boolean", "b -> (b xor pre latched)")])
     code, doc = _check(path)
     rz = doc["realizability"]
     assert code == 0, doc
@@ -56,7 +58,7 @@ def test_a_stream_read_by_one_requirement_takes_its_definitions_role(tmp_path):
     assert not [f for f in doc["findings"] if f["kind"] == "undeclared"]
     [note] = [a for a in doc["abstractions"] if a["atom"] == "latched"]
     assert "stream variable latched" in note["why"] and "reads b" in note["why"]
-    assert any(n.startswith("latched: FRET defines it (Internal) as b -> b or pre latched; "
+    assert any(n.startswith("latched: FRET defines it (Internal) as b -> (b xor pre latched); "
                             "that definition is a stream with state (it reads itself "
                             "through pre): fretc check reads") for n in doc["notes"])
 
@@ -81,7 +83,7 @@ def test_a_streams_undeclared_input_is_named_with_the_stream(tmp_path):
     the stream reading it and the requirement reading the stream: exit 2."""
     path = _write(tmp_path, ["whenever latched ctrl shall immediately satisfy o"], [
         _var("z", "", "boolean"), _var("o", "Output", "boolean"),
-        _var("latched", "Internal", "boolean", "z -> z or pre latched")])
+        _var("latched", "Internal", "boolean", "z -> (z xor pre latched)")])
     code, doc = _check(path)
     assert code == 2, doc
     [found] = [f for f in doc["findings"] if f["kind"] == "undeclared"]
@@ -152,16 +154,16 @@ def test_lmcps_autopilot_is_checked_with_its_stream_variables():
     assert auto["realizability"] == "unknown" and auto["exit_code"] == 1, auto
 
 
-def test_witnesses_of_a_stream_say_its_column_is_the_checks_own(tmp_path):
-    """The witness of a set reading a stream carries a column of the stream's free values;
-    a note says the audit replaying it computes the stream instead."""
+def test_witnesses_of_a_stream_say_its_column_is_computed(tmp_path):
+    """The witness of a set reading a stream carries the stream's column computed from its
+    inputs' (:mod:`fretc.check.stream_rows`); a note says so."""
     path = _write(tmp_path, ["whenever latched ctrl shall immediately satisfy o"], [
         _var("b", "Input", "boolean"), _var("o", "Output", "boolean"),
-        _var("latched", "Internal", "boolean", "b -> b or pre latched")])
+        _var("latched", "Internal", "boolean", "b -> (b xor pre latched)")])
     code, doc = _check(path, "--witness-dir", str(tmp_path / "w"))
     assert code == 0 and doc["witnesses"], doc
-    assert any(n.startswith("the witnesses give the stream variable latched values of their "
-                            "own") for n in doc["notes"]), doc["notes"]
+    assert any(n.startswith("the witnesses' columns of the stream variable latched are "
+                            "computed from the columns") for n in doc["notes"]), doc["notes"]
 
 
 def test_a_stream_declared_an_input_is_that_input(tmp_path):

@@ -143,17 +143,25 @@ def _var(name: str, assignment: str = "", kind: str = "Internal",
     return FretVariable("c", name, kind, data_type, assignment)
 
 
+_STAGE = (_var("a", kind="Input"), _var("b", kind="Input"),
+          _var("hold", "a and not b"), _var("held", "hold or pre held"),
+          _var("twice", "hold and not pre hold"), _var("k", "3.0", data_type="double"),
+          _var("uses", "held and a"), _var("bad", "a div b"))
+
+
 def test_definitions_expand_through_each_other_and_recursive_ones_stay_free():
-    defs = definitions((
-        _var("a", kind="Input"), _var("b", kind="Input"),
-        _var("hold", "a and not b"), _var("held", "hold or pre held"),
-        _var("twice", "hold and not pre hold"), _var("k", "3.0", data_type="double"),
-        _var("uses", "held and a"), _var("bad", "a div b")))
+    defs = definitions(_STAGE)
     assert str(defs.values["twice"]) == str(parse_definition(
         "(a and not b) and not pre (a and not b)", lambda n: True))
-    assert set(defs.values) == {"hold", "twice", "k"}
-    assert "reads itself" in defs.free["held"]
-    assert "reads held" in defs.free["uses"]
+    # (held, monotone in its previous value, is a since for the analyses, and uses with it:
+    # fretish.fret_since; the audit's reading keeps both streams, as before)
+    assert set(defs.values) == {"hold", "twice", "k", "held", "uses"}
+    assert defs.pasts == {"held"} and "held" not in defs.free and not defs.streams
+    ticked = definitions(_STAGE, since=False)
+    assert set(ticked.values) == {"hold", "twice", "k"}
+    assert "reads itself" in ticked.free["held"]
+    assert "reads held" in ticked.free["uses"]
+    assert list(ticked.streams) == ["held", "uses"]
     assert "outside FRET's Lustre subset" in defs.free["bad"]
 
 

@@ -23,7 +23,7 @@ def _export(tmp_path: Path, texts: list[str]) -> Path:
     path.write_text(json.dumps({"requirements": [
         {"reqid": f"R{k + 1}", "project": "P", "fulltext": t} for k, t in enumerate(texts)],
         "variables": [var("b", "Input"), var("o", "Output"),
-                      var("latched", "Internal", "b -> b or pre latched")]}),
+                      var("latched", "Internal", "b -> (b xor pre latched)")]}),
         encoding="utf-8")
     return path
 
@@ -33,8 +33,10 @@ def test_shield_refuses_a_stream_variable_by_name(tmp_path):
                               "whenever b ctrl shall immediately satisfy o"])
     got = CliRunner().invoke(main, ["shield", str(path), "-o", str(tmp_path / "out")])
     assert got.exit_code == 2, got.output
-    assert "R1 reads the FRET stream variable latched (its definition b -> b or pre " \
-           "latched reads b now and through pre): the shield does not compute" in got.output
+    assert "R1 reads the FRET stream variable latched (its definition b -> (b xor pre " \
+           "latched) reads b now and through pre; a boolean stream not monotone in its " \
+           "previous value (or reading one) is no past-time formula" in got.output
+    assert "the shield does not compute" in got.output
     got = CliRunner().invoke(main, ["shield", str(path), "--exclude", "R1",
                                     "-o", str(tmp_path / "out")])
     assert got.exit_code == 0, got.output
@@ -44,6 +46,6 @@ def test_testgen_notes_a_stream_variable(tmp_path):
     path = _export(tmp_path, ["whenever latched ctrl shall immediately satisfy o"])
     got = CliRunner().invoke(main, ["testgen", str(path), "-o", str(tmp_path / "t")])
     assert got.exit_code == 0, got.output
-    assert "note: latched (read by R1) is a FRET stream variable (its definition b -> b or " \
-           "pre latched reads b now and through pre): the tests give it values of their " \
+    assert "note: latched (read by R1) is a FRET stream variable (its definition b -> (b " \
+           "xor pre latched) reads b now and through pre): the tests give it values of their " \
            "own" in got.output
