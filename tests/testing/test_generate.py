@@ -144,6 +144,29 @@ def test_variables_compared_with_each_other(tmp_path):
     assert "condition:state = standby_state+" in met and "timing:immediately" in met
 
 
+def test_generated_pytest_file_compares_the_selected_requirements(tmp_path):
+    """Tests generated with ``--only A`` from a file that also holds B: the generated pytest
+    file audits the trace with the whole file and compares A's verdict, the one the tests
+    list (before: every verdict, B's too, so every test failed)."""
+    import os
+    import subprocess
+    import sys
+
+    p = tmp_path / "two.fret"
+    p.write_text("A: upon p the sw shall within 2 ticks satisfy q\n"
+                 "B: the sw shall always satisfy r\n")
+    res = CliRunner().invoke(main, ["testgen", str(p), "-o", str(tmp_path / "t"), "--pytest",
+                                    "--only", "A"])
+    assert res.exit_code == 0, res.output
+    doc = json.loads((tmp_path / "t" / "tests.json").read_text(encoding="utf-8"))
+    assert doc["tests"] and all(set(t["expected"]) == {"A"} for t in doc["tests"])
+    cmd = [sys.executable, "-m", "pytest", str(tmp_path / "t" / "test_fretc_generated.py"),
+           "-q", "-p", "no:cacheprovider", "-p", "no:randomly"]
+    env = {k: v for k, v in os.environ.items() if k != "FRETC_RUN_TRACE"}
+    ok = subprocess.run(cmd, cwd=tmp_path, env=env, capture_output=True, text=True)
+    assert ok.returncode == 0, ok.stdout + ok.stderr
+
+
 def test_generated_pytest_file_runs(tmp_path):
     """``--pytest``: the generated file, run by pytest, passes on the generated traces and
     fails when FRETC_RUN_TRACE's command makes a log with other verdicts."""
