@@ -1,0 +1,98 @@
+"""``fretc shield`` enforces a requirement reading a FRET boolean stream monotone in its
+previous value (the mode latch ``m := false -> (enter or (pre m and not exit))``): the game
+reads its past-time formula ``P S psi`` (fretish/fret_since.py), and the runtime's outputs
+follow the latch as the audit and the monitors compute it tick by tick
+(compiler/stream_code.py). A numeric stream and a boolean one not monotone in its previous
+value are still refused, each with its reason."""
+
+from __future__ import annotations
+
+import json
+import random
+import types
+from pathlib import Path
+
+import numpy as np
+from click.testing import CliRunner
+
+from fretc.cli import main
+from fretc.compiler.stream_code import stream_columns
+from fretc.fretish.fret_streams import stream_system
+from fretc.fretish.fret_variables import fret_variables
+from fretc.shield.runtime import ShieldRuntime
+
+LATCH = "false -> (enter or (pre m and not exit))"
+
+
+def _export(tmp_path: Path, texts: list[str]) -> Path:
+    def var(name: str, kind: str, assignment: str = "", data_type: str = "boolean") -> dict:
+        return {"project": "P", "component_name": "ctrl", "variable_name": name,
+                "idType": kind, "dataType": data_type, "assignment": assignment}
+
+    path = tmp_path / "p.json"
+    path.write_text(json.dumps({"requirements": [
+        {"reqid": f"R{k + 1}", "project": "P", "fulltext": t} for k, t in enumerate(texts)],
+        "variables": [var("enter", "Input"), var("exit", "Input"), var("o", "Output"),
+                      var("x", "Input", data_type="double"),
+                      var("m", "Internal", LATCH),
+                      var("t", "Internal", "false -> not pre t"),
+                      var("h", "Internal", "x -> if enter then x else pre h", "double")]}),
+        encoding="utf-8")
+    return path
+
+
+def _latch(path: Path, ticks: list[tuple[bool, bool]]) -> list[bool]:
+    """The latch over ``ticks`` as the audit computes it (Lustre's semantics)."""
+    variables = tuple(fret_variables(json.loads(path.read_text()), str(path)))
+    system = stream_system(variables, ["m"])
+    assert system is not None and system.inputs == ("enter", "exit")
+    cols = {"enter": np.array([e for e, _ in ticks]), "exit": np.array([x for _, x in ticks])}
+    return stream_columns(system, cols, len(ticks))["m"].tolist()
+
+
+def test_the_shield_enforces_a_requirement_reading_the_latch(tmp_path):
+    path = _export(tmp_path, ["whenever m ctrl shall immediately satisfy o",
+                              "whenever exit & !enter ctrl shall immediately satisfy !o"])
+    got = CliRunner().invoke(main, ["shield", str(path), "--emit", "python",
+                                    "-o", str(tmp_path / "out")])
+    assert got.exit_code == 0, got.output
+    assert "enforces R1, R2" in got.output and "stream variable" not in got.output
+    module = types.ModuleType("shield_since")
+    exec(compile((tmp_path / "out" / "p_shield.py").read_text(), "p_shield", "exec"),
+         module.__dict__)
+    rt = ShieldRuntime(module.TABLES)
+    rng = random.Random(7)
+    fixed = [(False, False), (True, False), (False, False), (False, True), (False, False),
+             (True, True), (False, True), (True, False), (False, False), (False, False)]
+    for ticks in [fixed] + [[(rng.random() < 0.3, rng.random() < 0.3) for _ in range(30)]
+                            for _ in range(5)]:
+        m = _latch(path, ticks)
+        if ticks is fixed:  # (false at the first tick; set by enter, reset by exit alone)
+            assert m == [False, True, True, False, False, True, False, True, True, True]
+        for proposed in (False, True):
+            rt.reset()
+            for k, ((enter, ex), latched) in enumerate(zip(ticks, m)):
+                d = rt.step({"enter": enter, "exit": ex}, {"o": proposed})
+                reset = ex and not enter
+                # (the latch forces o; a reset, where the latch is false, forbids it; the
+                # shield changes the proposal only then)
+                want = True if latched else (False if reset else proposed)
+                assert bool(d.outputs["o"]) == want, (ticks, k, d)
+                assert d.overridden == (want != proposed), (ticks, k, d)
+
+
+def test_the_other_streams_are_refused_with_their_reason(tmp_path):
+    path = _export(tmp_path, ["whenever t ctrl shall immediately satisfy o",
+                              "whenever h > 2.0 ctrl shall immediately satisfy o"])
+    got = CliRunner().invoke(main, ["shield", str(path), "--exclude", "R2"])
+    assert got.exit_code == 2, got.output
+    assert ("R1 reads the FRET stream variable t (its definition false -> not pre t reads "
+            "no variable now and through pre; a boolean stream not monotone in its previous "
+            "value (or reading one) is no past-time formula: the game would need state bits "
+            "of its own for it)") in " ".join(got.output.split())
+    got = CliRunner().invoke(main, ["shield", str(path), "--exclude", "R1"])
+    assert got.exit_code == 2, got.output
+    assert ("R2 reads the FRET stream variable h (its definition x -> if enter then x else "
+            "pre h reads enter, x now and through pre; a numeric stream is a stored real "
+            "number, a memory of a past value: no finite game holds it)"
+            ) in " ".join(got.output.split())
