@@ -3,7 +3,7 @@ reads an Internal variable FRET's glossary defines: the monitor computes the var
 the variables its definition reads, as FRET's own monitors (Ogma's Copilot streams) do, so
 its inputs are those variables; each definition used is said once on stderr. One that reads
 itself through ``pre`` (a stream with state) is computed by the monitor tick by tick
-(tests/compiler/test_monitor_streams.py); R2U2's C2PO keeps it free, with the reason. The
+(tests/compiler/test_monitor_streams.py); R2U2's C2PO reads it as an input signal, with the reason. The
 monitor steps as the same requirement with the definition written out in FRETish."""
 
 from __future__ import annotations
@@ -25,6 +25,8 @@ _VARIABLES = [
      "dataType": "boolean", "assignment": "a and not pre a"},
     {"component_name": "ctrl", "variable_name": "seen", "idType": "Internal",
      "dataType": "boolean", "assignment": "a -> (a or pre seen)"},
+    {"component_name": "ctrl", "variable_name": "toggle", "idType": "Internal",
+     "dataType": "boolean", "assignment": "false -> (a xor pre toggle)"},
 ]
 
 
@@ -51,10 +53,14 @@ def test_the_monitor_reads_the_variables_the_definition_reads(tmp_path):
     assert sorted(mod["MONITORS"]["R1"]().VARIABLES) == ["a", "o"]
     assert "seen: FRET defines it (Internal) as a -> (a or pre seen); that definition is a " \
            "stream with state (it reads itself through pre): computed tick by tick" in err
-    # R2U2's C2PO keeps it free, and says why
-    _got, err = _monitors(tmp_path, "whenever seen ctrl shall immediately satisfy o", "c2po")
-    assert "seen: FRET defines it (Internal) as a -> (a or pre seen); fretc reads it as a " \
-           "free variable: its definition reads itself" in err
+    # R2U2's C2PO reads one that no past-time formula writes (a toggle: the parity of a's
+    # ticks) as an input signal, and says why and what the trace must carry
+    _got, err = _monitors(tmp_path, "whenever toggle ctrl shall immediately satisfy o", "c2po")
+    assert "toggle: FRET defines it (Internal) as false -> (a xor pre toggle); that " \
+           "definition is a stream with state (it reads itself through pre): an input " \
+           "signal of the C2PO " \
+           "specification: R2U2 keeps no stream's state, so the trace R2U2 reads must " \
+           "carry the definition's values tick by tick" in err
 
 
 def test_the_c_monitor_reads_the_variables_the_definition_reads(tmp_path):

@@ -158,7 +158,7 @@ def test_a_division_by_zero_gives_the_audits_unknown(tmp_path):
 def test_lmcps_stream_readers_generated_tests_are_the_audits(tmp_path):
     """FRET's LMCPS AP-010bv2, AP-010b and AP-004b (reading psiAtZero, rollAtZero, and
     dividing by differences): every obligation covered, every expected verdict the audit's
-    (before: free stream values, and 8 verdicts of 6 tests that were not)."""
+    (before: free stream values, and 8 of the 6 tests' 18 expected verdicts were not)."""
     doc = json.loads(LMCPS.read_text(encoding="utf-8"))
     ids = ("AP-010bv2", "AP-010b", "AP-004b")
     doc["requirements"] = [r for r in doc["requirements"] if r.get("reqid") in ids]

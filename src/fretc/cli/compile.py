@@ -48,7 +48,7 @@ def _entries(paths, tick_period: str | None = None) -> list:
 
 
 def _load(paths, tick_period: str | None = None, definitions: bool = False,
-          streams: bool = False) -> list:
+          streams: bool = False, stream_use: str = "") -> list:
     """The compiled requirements of ``paths`` (:func:`_entries`, then the compiler). With
     ``definitions`` (the runtime monitors: ``--emit monitor``, ``c``, ``c2po``), the
     Internal variables and modes a FRET export defines are their definitions, as FRET's
@@ -57,7 +57,8 @@ def _load(paths, tick_period: str | None = None, definitions: bool = False,
     (:func:`fretc.fretish.fret_variables.fret_declarations`); with ``streams`` too
     (``monitor``, ``c``), a definition that reads itself through ``pre`` is computed by
     the monitor tick by tick (:mod:`fretc.fretish.fret_streams`), its inputs the variables
-    it reads."""
+    it reads; ``stream_use`` (``c2po``): what the notes say of a stream variable kept an
+    input instead (:func:`fretc.fretish.fret_variables.unused`)."""
     # lazy: the compiler (Lark tables, Spot) only when a command compiles
     from fretc.compiler.build import compile_entries
 
@@ -65,7 +66,8 @@ def _load(paths, tick_period: str | None = None, definitions: bool = False,
     if definitions:
         from fretc.fretish.fret_variables import fret_declarations
 
-        entries, notes = fret_declarations(entries, use=_MONITOR_USE, streams=streams)
+        entries, notes = fret_declarations(entries, use=_MONITOR_USE, streams=streams,
+                                           stream_use=stream_use)
         for n in notes:
             click.echo(_shown(f"note: {n}"), err=True)
     return compile_entries(entries)
@@ -73,6 +75,13 @@ def _load(paths, tick_period: str | None = None, definitions: bool = False,
 
 #: how a runtime monitor uses a FRET definition (the notes of :func:`_load`)
 _MONITOR_USE = "in the monitor (its inputs are the variables the definition reads)"
+
+#: what ``--emit c2po``'s notes say of a stream variable (R2U2's specifications keep no
+#: state but their temporal operators': a real number held from tick to tick is no formula)
+_C2PO_STREAM_USE = ("an input signal of the C2PO specification: R2U2 keeps no stream's "
+                    "state, so the trace R2U2 reads must carry the definition's values tick "
+                    "by tick (fretc audit and fretc's --emit monitor and --emit c monitors "
+                    "compute them from the variables it reads)")
 
 
 @click.command("compile")
@@ -107,7 +116,8 @@ def compile_cmd(files: tuple[str, ...], emit: str, as_json: bool, output: str | 
             _write_json_list(sys.stdout, texts)
             sys.exit(1 if failed else 0)
     compiled = _load(files, tick_period, definitions=emit in ("monitor", "c", "c2po"),
-                     streams=emit in ("monitor", "c"))
+                     streams=emit in ("monitor", "c"),
+                     stream_use=_C2PO_STREAM_USE if emit == "c2po" else "")
     if not compiled:
         _no_requirements(files)
     failed = [c for c in compiled if c.error is not None]
