@@ -48,6 +48,7 @@ import dataclasses
 from dataclasses import dataclass
 
 from fretc.fretish import ast as A
+from fretc.fretish.fret_since import SINCE
 
 __all__ = ["Obligation", "obligations", "other_condition_kind", "atoms_of", "expr_text", "replace_atom",
            "with_ticks", "FIELDS", "TIMINGS"]
@@ -112,6 +113,8 @@ def expr_text(e: A.Expr) -> str:
         return f"{e.op}{_bracket(e.operand)}"
     if isinstance(e, A.Binary):
         return f"{_bracket(e.left)} {e.op} {_bracket(e.right)}"
+    if e.name == SINCE and len(e.args) == 2:  # (a FRET latch: :mod:`fretc.fretish.fret_since`)
+        return f"({expr_text(e.args[0])}) S ({expr_text(e.args[1])})"
     return f"{e.name}({', '.join(expr_text(a) for a in e.args)})"
 
 

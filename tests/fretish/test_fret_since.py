@@ -12,6 +12,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from fretc.common.errors import FretishError
+from fretc.compiler.coverage import expr_text as coverage_text
 from fretc.compiler.evaluate import series
 from fretc.compiler.expressions import Expander
 from fretc.compiler.ir import TRUE
@@ -174,6 +175,7 @@ def test_the_latch_and_what_reads_it():
                       parity="false -> (pre parity xor s)")
     defs = definitions(variables)
     assert expr_text(defs.values["s"]) == "(((! FTP) & (a | (! b))) S ((! FTP) & a))"
+    assert coverage_text(defs.values["s"]) == "(!FTP & (a | !b)) S (!FTP & a)"
     assert expr_text(defs.values["uses"]) == f"({expr_text(defs.values['s'])} & c)"
     assert defs.pasts == {"s"} and list(defs.streams) == ["parity"]
     assert list(definitions(variables, since=False).streams) == ["s", "parity", "uses"]

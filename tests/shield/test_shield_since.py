@@ -96,3 +96,16 @@ def test_the_other_streams_are_refused_with_their_reason(tmp_path):
             "pre h reads enter, x now and through pre; a numeric stream is a stored real "
             "number, a memory of a past value: no finite game holds it)"
             ) in " ".join(got.output.split())
+
+
+def test_testgen_reads_the_latch_as_a_definition(tmp_path):
+    """testgen's notes name the streams it gives values of their own
+    (check.streams.streams_of_entry): the latch is none, the toggle still one. (Its
+    obligations may end unknown, exit 3: Spot's traces read ft's derived past atom, the
+    latch's since, as a free proposition, as for FRET's other past-time functions.)"""
+    path = _export(tmp_path, ["whenever m ctrl shall immediately satisfy o",
+                              "whenever t ctrl shall immediately satisfy o"])
+    got = CliRunner().invoke(main, ["testgen", str(path), "-o", str(tmp_path / "tests")])
+    assert got.exit_code in (0, 3), got.output
+    assert "note: t (read by R2) is a FRET stream variable" in got.output
+    assert "note: m (read by" not in got.output
