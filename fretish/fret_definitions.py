@@ -10,11 +10,12 @@ free variable, why: a definition outside the subset, or one that reads itself (t
 ``pre``: ``psiAtZero`` is ``Psi -> if ... then Psi else pre psiAtZero``, a stream with state
 that no expression of the variables' present and past values without it writes), or that
 reads such a variable. Those streams with state are listed apart too (``streams``): the
-expansions keep them free, except a boolean one monotone in its own previous value (a
-latch: ``false -> (enter or (pre m and not exit))``), which is exactly the past-time formula
-``P S psi`` and is expanded so (:mod:`fretc.fretish.fret_since`) (``fretc check`` gives a comparison reading one the role of the
+expansions keep them free (``fretc check`` gives a comparison reading one the role of the
 variables its definition reads: :mod:`fretc.check.streams`), the audit and the runtime
-monitors compute them tick by tick (:mod:`fretc.fretish.fret_streams`). A Mode with a mode requirement (FRET's glossary: the condition under
+monitors compute them tick by tick (:mod:`fretc.fretish.fret_streams`); but a boolean one
+monotone in its own previous value (a latch: ``false -> (enter or (pre m and not exit))``)
+is exactly the past-time formula ``P S psi``, and the analyses' expansions are that formula
+(:mod:`fretc.fretish.fret_since`). A Mode with a mode requirement (FRET's glossary: the condition under
 which the component is in that mode, a FRETish condition) is that condition, so ``in M mode``
 is the intervals where it holds. The expansions are what ``fretc check``, ``fretc shield`` and ``fretc
 testgen`` analyse (:func:`fretc.fretish.fret_variables.with_fret_definitions`); the formulas

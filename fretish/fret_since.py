@@ -20,9 +20,10 @@ replaced by its own first value), which is the recursion of the past-time *since
 FRET's pt formulas read it: ``(a S c)_t`` iff ``c_k`` at some ``k <= t`` and ``a_j`` at
 every ``j`` in ``(k, t]``, so ``(a S c)_t = c_t | (a_t & (a S c)_(t-1))``, false before
 the trace): ``s = P S psi`` with ``psi = Q | (FTP & D0)`` (``FTP`` the trace's first
-instant; ``D0`` implies ``Q`` is not needed: ``Q`` implies ``D0`` by monotonicity, so
-``psi`` is ``D0`` at the first instant and ``Q`` after). The mode latch is
-``(enter | !exit) S enter``; ``b -> b or pre latched`` is ``true S b``, FRET's ``once b``.
+instant; ``Q`` implies ``D0`` by monotonicity, so ``psi`` is ``D0`` at the first instant
+and ``Q`` after; ``psi = Q`` when every first value is false). The mode latch is
+``(!FTP & (enter | !exit)) S (!FTP & enter)``; ``b -> b or pre latched`` is
+``(!FTP | b) S b``, FRET's ``once b``.
 
 :func:`since_expansion` builds that formula as the AST call :data:`SINCE` (``SINCE(P,
 psi)``), a name neither FRETish's grammar (a name starts with a letter) nor the Lustre
