@@ -20,13 +20,14 @@ def _var(name: str, kind: str, assignment: str = "") -> dict:
             "dataType": "boolean", "assignment": assignment}
 
 
-def _check(tmp_path: Path, texts: list[str], m: str = LATCH) -> tuple[int, dict]:
+def _check(tmp_path: Path, texts: list[str], m: str = LATCH, *args: str
+           ) -> tuple[int, dict]:
     path = tmp_path / "p.json"
     path.write_text(json.dumps({"requirements": [
         {"reqid": f"R{k + 1}", "project": "P", "fulltext": t} for k, t in enumerate(texts)],
         "variables": [_var("enter", "Input"), _var("exit", "Input"), _var("o", "Output"),
                       _var("m", "Internal", m)]}), encoding="utf-8")
-    got = CliRunner().invoke(main, ["check", str(path), "--no-progress", "--json"])
+    got = CliRunner().invoke(main, ["check", str(path), "--no-progress", "--json", *args])
     return got.exit_code, json.loads(got.output)
 
 
@@ -72,4 +73,14 @@ def test_a_latch_at_its_first_tick_is_false(tmp_path):
     would be the environment's to give)."""
     code, doc = _check(tmp_path, ["ctrl shall at the first timepoint satisfy m & o"])
     assert code == 1 and [g["realizable"] for g in doc["realizability"]["groups"]] == [False]
+    _no_stream(doc)
+
+
+def test_witnesses_say_nothing_of_a_stream_for_the_latch(tmp_path):
+    """The witnesses' note on stream columns (check's witness note) names streams only:
+    the latch is a definition there, its values the formula's."""
+    code, doc = _check(tmp_path, ["whenever m ctrl shall immediately satisfy o"], LATCH,
+                       "--witness-dir", str(tmp_path / "w"))
+    assert code == 0 and doc["witnesses"], doc
+    assert not [n for n in doc["notes"] if "stream variable" in n], doc["notes"]
     _no_stream(doc)
