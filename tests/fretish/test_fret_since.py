@@ -79,6 +79,10 @@ def _lustre(t: tuple) -> str:
         return f"({_lustre(t[1])} {k} {_lustre(t[2])})"
     if k == "ite":
         return f"(if {_lustre(t[1])} then {_lustre(t[2])} else {_lustre(t[3])})"
+    if k in ("xor", "="):
+        return f"({_lustre(t[1])} {k} {_lustre(t[2])})"
+    if k == "pre of":
+        return f"(pre {_lustre(t[1])})"
     op = "->" if k == "arrow" else "=>"
     return f"({_lustre(t[1])} {op} {_lustre(t[2])})"
 
@@ -148,6 +152,26 @@ def test_a_monotone_mode_with_either_first_value_is_its_since(tree, trace):
     """A Mode's FRETish requirement reading ``preBool(true, s)`` and ``preBool(false, s)``
     (first values true and false, mixed)."""
     _agree(_vars(mode=_fretish(tree)), trace)
+
+
+#: any boolean definition reading ``pre s`` (``xor``, ``=``, ``pre`` of a formula reading s,
+#: s in a condition, under a negation)
+_any = st.recursive(st.one_of(st.tuples(st.just("self"), st.just(False)), _free), lambda t: (
+    st.one_of(st.tuples(st.sampled_from(["and", "or", "xor", "=", "arrow", "implies"]), t, t),
+              st.tuples(st.just("not"), t), st.tuples(st.just("ite"), t, t, t),
+              st.tuples(st.just("pre of"), t))), max_leaves=8)
+
+
+@settings(max_examples=300, deadline=None)
+@given(_any.filter(_has_self), _traces)
+def test_whatever_is_read_as_a_since_is_the_stream(tree, trace):
+    """Soundness over any definition: when the analyses read ``s`` as a since, it is the
+    stream; otherwise it stays one."""
+    variables = _vars(_lustre(tree))
+    if "s" in definitions(variables).pasts:
+        _agree(variables, trace)
+    else:
+        assert "s" in definitions(variables).streams
 
 
 @pytest.mark.parametrize("definition", [
