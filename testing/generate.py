@@ -44,7 +44,8 @@ from fretc.common.textsafe import csv_line, visible
 from fretc.check.checker import Checker
 from fretc.check.items import CheckItem, make_item
 from fretc.check.solver import UNKNOWN, SpotWorker
-from fretc.check.stream_rows import trace_streams, with_stream_inputs
+from fretc.check.stream_rows import (TraceStreams, trace_streams, with_stream_columns,
+                                     with_stream_inputs)
 from fretc.check.witness import finite_trace, trace_columns
 from fretc.compiler import ir
 from fretc.compiler.build import Compiled
@@ -178,11 +179,17 @@ def _classes(item: CheckItem, verdict: str) -> list[ir.Node]:
 
 class Finder:
     """The queries of one requirement's obligations (module docstring) in one Spot worker
-    (``worker``); ``kinds``: FRET variable -> ``"bool"``/``"float"`` of the rows built."""
+    (``worker``); ``kinds``: FRET variable -> ``"bool"``/``"float"`` of the rows built;
+    ``streams``: the set's FRET stream variables, whose columns every trace found computes
+    (:func:`fretc.check.stream_rows.with_stream_columns`)."""
 
-    def __init__(self, worker: SpotWorker, kinds: dict[str, str]):
+    def __init__(self, worker: SpotWorker, kinds: dict[str, str],
+                 streams: TraceStreams | None = None):
         self.worker = worker
         self.kinds = kinds
+        #: the FRET stream variables of the whole set (a query's items may be of another
+        #: component, whose export does not define them): computed in every trace
+        self.streams = streams
 
     def _rows(self, items: list[CheckItem], queries: list[list[ir.Node]], accept: Accept
               ) -> tuple[Any, str]:  # (rows, None, UNKNOWN or SPURIOUS; the engine)
@@ -194,7 +201,7 @@ class Finder:
             if got == UNKNOWN:
                 unknown = True
             elif got:
-                rows = _complete(got, self.kinds)
+                rows = with_stream_columns(_complete(got, self.kinds), self.streams)
                 if accept(rows):
                     return rows, engine
                 spurious = True
@@ -258,7 +265,7 @@ def _candidates(compiled: Sequence[Compiled], obs: dict[str, list[Obligation]],
     unknown: list[tuple[Obligation, str]] = []
     left = {(c.id, o.id) for c in compiled for o in obs[c.id]}
     with SpotWorker(budget or Budget(), fork=fork) as worker:
-        finder = Finder(worker, kinds)
+        finder = Finder(worker, kinds, trace_streams(compiled, kinds))
         for c in compiled:
             for ob in obs[c.id]:
                 if (c.id, ob.id) not in left:

@@ -47,5 +47,5 @@ def test_testgen_notes_a_stream_variable(tmp_path):
     got = CliRunner().invoke(main, ["testgen", str(path), "-o", str(tmp_path / "t")])
     assert got.exit_code == 0, got.output
     assert "note: latched (read by R1) is a FRET stream variable (its definition b -> (b " \
-           "xor pre latched) reads b now and through pre): the tests give it values of their " \
-           "own" in got.output
+           "xor pre latched) reads b now and through pre): each test's column of it is " \
+           "computed from the columns of those variables" in got.output

@@ -141,6 +141,22 @@ def test_generated_tests_of_stream_readers_are_the_audits(tmp_path):
                                         for o in doc["unknown"] + doc["unmeetable"]}
 
 
+def test_a_stream_of_one_component_is_computed_in_another_components_tests(tmp_path):
+    """R2's traces (component ``other``, whose export defines no stream) carry ``k``'s column
+    too, as every test holds every variable of the set: it is computed there as well (``k``
+    is 5 at every tick), so R1's expected verdict on them is the audit's (before: the
+    column's default 0, and R1 ``violated`` where the audit says ``satisfied``)."""
+    variables = _variables() + [
+        _var("k", "Internal", "double", "5.0 -> pre k + 0.0"),
+        {**_var("c", "Input", "boolean"), "component_name": "other"},
+        {**_var("p", "Output", "boolean"), "component_name": "other"}]
+    req = _export(tmp_path / "req", ["ctrl shall always satisfy k > 1.0",
+                                     "whenever c other shall immediately satisfy p"],
+                  variables)
+    doc = _generated_match_the_audit(req, tmp_path / "t")
+    assert any(t["generated_for"]["requirement"] == "R2" for t in doc["tests"])
+
+
 def test_a_division_by_zero_gives_the_audits_unknown(tmp_path):
     """A requirement dividing by a difference the trace leaves 0 (``y / (y - y0)``) reads
     NaN there: its expected verdict is the audit's under the NaN rule, never the interval
