@@ -41,6 +41,7 @@ from typing import Any, TYPE_CHECKING
 import numpy as np
 
 from fretc.check.atom_values import concrete_rows, free_atoms
+from fretc.check.past_testers import with_testers
 from fretc.check.solver import UNKNOWN
 from fretc.check.stream_rows import trace_streams, with_stream_columns, with_stream_inputs
 from fretc.common.outputs import output_folder, write_file
@@ -138,8 +139,12 @@ def finite_trace(checker: Checker, formulas: Sequence[Node], columns: dict[str, 
 
 def _spot_trace(checker, formulas: Sequence[Node], length: int | None):
     """The letters of a finite trace meeting the ft ``formulas`` by the LAST encoding of the
-    module docstring (Spot, or z3 past its bounds), None or UNKNOWN."""
+    module docstring (Spot, or z3 past its bounds), None or UNKNOWN. A derived past atom
+    is its expansion over temporal testers (:func:`fretc.check.past_testers.with_testers`),
+    so the letters give it its value."""
     extra = [_finite_model(formulas)]
+    formulas, axioms = with_testers(formulas, LAST)
+    extra += axioms
     if length is not None:
         at = LAST
         for _ in range(length - 1):
