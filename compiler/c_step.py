@@ -35,7 +35,7 @@ from dataclasses import dataclass, field
 
 from fretc.compiler.ir import Node, name_of, window
 from fretc.compiler.printers import to_smv
-from fretc.compiler.pt_step import CodegenError, _future_error, post_order
+from fretc.compiler.pt_step import CodegenError, _future_error, opaque, post_order
 
 __all__ = ["CField", "CStep", "HELPERS", "c_number", "c_string", "compile_c_nodes",
            "uint_type"]
@@ -157,7 +157,8 @@ def _ctype(n: Node, code: CStep) -> str:
 
 def _emit(n: Node, code: CStep) -> str:
     """The C expression of node ``n`` (its arguments done): a literal or a local."""
-    a = [code.locals[x] for x in n.args]
+    # (an uninterpreted application is an input: its arguments have no code, post_order)
+    a = [] if opaque(n) else [code.locals[x] for x in n.args]
     ctype = code.types[n] = _ctype(n, code)
     op = n.op
     if op in ("true", "false"):

@@ -122,10 +122,19 @@ def compile_nodes(roots: list[Node], code: StepCode) -> list[str]:
     return [code.locals[r] for r in roots]
 
 
+def opaque(n: Node) -> bool:
+    """Whether ``n`` is an uninterpreted function application (a ``call``, or an ``fn``
+    other than FRET's ``absReal``/``absInt``/``minReal``/``minInt``/``maxReal``/``maxInt``):
+    a generated monitor reads its value as an input named by its printed text."""
+    return n.op == "call" or (n.op == "fn" and n.name not in _PY_FN)
+
+
 def post_order(roots: list[Node], compiled: Container[Node]) -> list[Node]:
     """The nodes under ``roots`` not in ``compiled`` (the nodes a step code has a local of
     already), each once, children first: the order their code is emitted in (Python here,
-    C in :mod:`fretc.compiler.c_step`)."""
+    C in :mod:`fretc.compiler.c_step`). An uninterpreted function application (a ``call``,
+    or an ``fn`` fretc does not compute) is read as an input of its own, so its arguments
+    are not visited: no code computes a value nothing reads (C's ``-Wunused-variable``)."""
     post: list[Node] = []
     seen: set[Node] = set()
     for r in roots:
@@ -139,6 +148,8 @@ def post_order(roots: list[Node], compiled: Container[Node]) -> list[Node]:
                 post.append(node)
                 continue
             stack.append((node, True))
+            if opaque(node):
+                continue
             for a in reversed(node.args):
                 stack.append((a, False))
     return post
@@ -147,7 +158,8 @@ def post_order(roots: list[Node], compiled: Container[Node]) -> list[Node]:
 def _emit(n: Node, code: StepCode, deferred: list[tuple[int, str]]) -> str:
     """The code of node ``n`` (its arguments compiled already): a literal, a local or an
     inlined expression; lines and state slots it needs are added to ``code``."""
-    a = [code.locals[x] for x in n.args]
+    # (an uninterpreted application is an input: its arguments have no code, post_order)
+    a = [] if opaque(n) else [code.locals[x] for x in n.args]
     out = code.new()
     direct = _direct(n, a, code)
     if direct is not None:

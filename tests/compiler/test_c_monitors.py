@@ -245,6 +245,23 @@ def test_random_sentences(tmp_path):
     assert len(b.monitors) > 40
 
 
+def test_an_uninterpreted_function_of_terms_builds_under_werror(tmp_path):
+    """A function fretc does not compute (``det(a*a + b, a - 1.0)``, as LMCPS's EB-001's
+    ``det_3x3`` of sums of products) is an input named by its printed call: its arguments'
+    terms are not computed (before: unused ``const double`` locals, an error under
+    ``-Wall -Werror``), and the C monitor steps as the Python one."""
+    needs_cc()
+    compiled = _compile({"U": "the sw shall always satisfy det(a*a + b, a - 1.0) <= 2.0 | "
+                              "absReal(a - b) < 1.0"})
+    b = Built(compiled, tmp_path, "opaque", False)
+    name = "det(((a * a) + b),(a - 1.0))"
+    rnd = random.Random(3)
+    trace = [{"a": rnd.uniform(-2, 2), "b": rnd.uniform(-2, 2), name: rnd.uniform(0, 4)}
+             for _ in range(12)]
+    [out] = b.run([("U", trace)])
+    assert out["ticks"] == b.python("U", trace)[0]
+
+
 # --------------------------------------------------------------------------- the C text
 def _code(text: str) -> str:
     return re.sub(r"/\*.*?\*/", "", text, flags=re.S)
