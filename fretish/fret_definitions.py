@@ -31,7 +31,8 @@ from dataclasses import dataclass
 from typing import Any
 
 from fretc.fretish import ast as A
-from fretc.fretish.fret_since import reads_itself_monotonically, since_expansion
+from fretc.fretish.fret_since import (reads_itself_as_bit, reads_itself_monotonically,
+                                      since_expansion, stream_expansion)
 from fretc.fretish.limits import MAX_EXPR_DEPTH, depth
 from fretc.fretish.lustre import LustreError, LustreTooDeep, parse_definition
 
@@ -69,17 +70,20 @@ class Definitions:
     reads not expanded), in an order where each reads the earlier ones only outside ``pre``
     (:mod:`fretc.fretish.fret_streams`); ``pasts``: the boolean streams monotone in their
     previous value that ``values`` has as past-time formulas (:mod:`fretc.fretish.
-    fret_since`; with :func:`definitions`' ``since``)."""
+    fret_since`; with :func:`definitions`' ``since``); ``bits``: the other boolean streams
+    of booleans ``values`` has as one-bit machines (with :func:`definitions`' ``bits``)."""
 
     values: dict[str, A.Expr]
     free: dict[str, str]
     texts: dict[str, str]
     streams: dict[str, A.Expr] = dataclasses.field(default_factory=dict)
     pasts: frozenset[str] = frozenset()
+    bits: frozenset[str] = frozenset()
 
 
 @functools.lru_cache(maxsize=256)
-def definitions(variables: tuple[Any, ...], since: bool = True) -> Definitions:
+def definitions(variables: tuple[Any, ...], since: bool = True,
+                bits: bool = False) -> Definitions:
     """The :class:`Definitions` of one component's FRET variables (a tuple of
     :class:`fretc.fretish.fret_variables.FretVariable`; those that are not Internal or have
     no assignment are not definitions). Deterministic; memoized by the tuple.
@@ -89,7 +93,15 @@ def definitions(variables: tuple[Any, ...], since: bool = True) -> Definitions:
     with the definitions that read it, out of ``free`` and ``streams`` (named in
     ``pasts``); without (the audit's and the runtime monitors' reading, which compute every
     stream tick by tick) it is a stream like the others. The streams are those of the
-    reading without ``since`` in both (less the expanded ones)."""
+    reading without ``since`` in both (less the expanded ones).
+
+    ``bits`` (with ``since``; the readings of ``fretc check`` and ``fretc shield``, whose
+    pt monitors keep state bits): a boolean stream that is not monotone but reads only
+    booleans and itself only through ``preBool`` (:func:`fretc.fretish.fret_since.
+    reads_itself_as_bit`) is its one-bit machine (:func:`fretc.fretish.fret_since.
+    stream_expansion`), in ``values`` likewise (named in ``bits``); without, it stays a
+    stream (the other readers of these expansions, testgen's and ``fretc compile``'s
+    emitters, have no form for it)."""
     kinds = {v.name: v for v in variables}
 
     def is_boolean(name: str) -> bool:
@@ -123,13 +135,15 @@ def definitions(variables: tuple[Any, ...], since: bool = True) -> Definitions:
     values: dict[str, A.Expr] = {}
     monotone = frozenset(n for n in raw if since and (is_boolean(n) or kinds[n].kind == "Mode")
                          and reads_itself_monotonically(raw[n], n))
+    machines = frozenset(n for n in raw if since and bits and n not in monotone
+                         and is_boolean(n) and reads_itself_as_bit(raw[n], n, is_boolean))
     for name in sorted(raw):
-        _expand(name, raw, values, free, (), monotone)
+        _expand(name, raw, values, free, (), monotone, machines)
     if not since:
         return Definitions(values, free, texts, _streams(raw, values, free))
     ticked = definitions(variables, False).streams
     return Definitions(values, free, texts, {n: e for n, e in ticked.items() if n not in values},
-                       frozenset(monotone & set(values)))
+                       frozenset(monotone & set(values)), frozenset(machines & set(values)))
 
 
 def _mode(text: str, is_boolean: Any) -> A.Expr:
@@ -167,11 +181,13 @@ def _plain(e: Any) -> Any:
 
 def _expand(name: str, raw: dict[str, A.Expr], values: dict[str, A.Expr],
             free: dict[str, str], stack: tuple[str, ...],
-            monotone: frozenset[str] = frozenset()) -> A.Expr | None:
+            monotone: frozenset[str] = frozenset(),
+            machines: frozenset[str] = frozenset()) -> A.Expr | None:
     """The expansion of ``name`` (memoized in ``values``), None when it stays free (the
     reason recorded in ``free``); a name of ``monotone`` (a boolean stream monotone in its
     previous value) reads itself as is, its expansion its past-time formula
-    (:func:`fretc.fretish.fret_since.since_expansion`)."""
+    (:func:`fretc.fretish.fret_since.since_expansion`); one of ``machines`` likewise, its
+    expansion its one-bit machine (:func:`fretc.fretish.fret_since.stream_expansion`)."""
     if name in values:
         return values[name]
     if name in free:
@@ -188,9 +204,9 @@ def _expand(name: str, raw: dict[str, A.Expr], values: dict[str, A.Expr],
     blocked: list[str] = []
 
     def var(v: A.Var) -> A.Expr:
-        if v.name not in raw or (v.name == name and name in monotone):
+        if v.name not in raw or (v.name == name and name in monotone | machines):
             return v
-        got = _expand(v.name, raw, values, free, (*stack, name), monotone)
+        got = _expand(v.name, raw, values, free, (*stack, name), monotone, machines)
         if got is None:
             blocked.append(v.name)
             return v
@@ -205,6 +221,8 @@ def _expand(name: str, raw: dict[str, A.Expr], values: dict[str, A.Expr],
         return None
     if name in monotone:
         out = since_expansion(out, name)
+    elif name in machines:
+        out = stream_expansion(out, name)
     if _size(out) > MAX_EXPANSION_NODES:
         free[name] = f"its expansion has more than {MAX_EXPANSION_NODES} nodes"
         return None

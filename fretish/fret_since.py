@@ -33,17 +33,35 @@ in pt, a derived ``past`` atom in ft, as FRET's other past-time functions) and p
 ``(P S psi)`` (:func:`fretc.compiler.printers.expr_text`). A boolean stream that is not
 monotone in its previous value (a toggle ``false -> not pre t``: it counts modulo 2, no
 past-time formula of its inputs is it) and a numeric stream stay streams with state.
+
+A boolean stream that is not monotone but reads only booleans (no number, no comparison)
+and itself only as ``preBool(b, name)`` is still a deterministic machine with one bit of
+state, its previous value ``x`` (pt monitors keep one bit per past operator: Havelund &
+Rosu): ``s_t = P_t`` when ``s_(t-1)``, else ``Q_t``, with ``P``, ``Q`` the definition with
+each occurrence ``true``, ``false`` after the first instant and its own ``b`` at it (so
+``s_0 = Q_0 = D_0[pre s := b]``, the previous value read as false there).
+:func:`stream_expansion` builds it as the AST call ``STREAM_PREFIX + name`` with arguments
+``(P, Q)`` (:func:`stream_name` reads the name back), for the analyses that ask for it
+(``definitions(..., bits=True)``: ``fretc check`` and ``fretc shield``); the compiler makes it
+the IR node ``stream`` (pt) or a derived ``past`` atom named by the stream (ft).
 """
 
 from __future__ import annotations
 
+from typing import Any
+
 from fretc.fretish import ast as A
 
-__all__ = ["SINCE", "since_expansion", "reads_itself_monotonically"]
+__all__ = ["SINCE", "since_expansion", "reads_itself_monotonically", "STREAM_PREFIX",
+           "stream_name", "reads_itself_as_bit", "stream_expansion"]
 
 #: the AST call name of the past-time since ``SINCE(a, c)`` = ``a S c`` (module docstring):
 #: no FRETish or Lustre text can produce it (``$`` starts no name of either)
 SINCE = "$since"
+
+#: the AST call name of a boolean stream of booleans read by its state bit, followed by the
+#: stream's name (module docstring); ``$`` starts no FRETish or Lustre name
+STREAM_PREFIX = "$stream "
 
 #: the operators through which an occurrence keeps its polarity
 _KEEP = frozenset({"&", "|"})
@@ -93,6 +111,83 @@ def since_expansion(e: A.Expr, name: str) -> A.Expr:
     firsts = {_first(x, name) for x in A.walk(e)} - {None}
     psi = q if firsts == {False} else A.Binary("|", q, A.Binary("&", A.Var("FTP"), put(None)))
     return A.Call(SINCE, (put(True), psi))
+
+
+def stream_name(e: A.Expr) -> str | None:
+    """The stream's name when ``e`` is a call made by :func:`stream_expansion` (two
+    arguments, ``P`` and ``Q``), else None."""
+    if isinstance(e, A.Call) and e.name.startswith(STREAM_PREFIX) and len(e.args) == 2:
+        return e.name[len(STREAM_PREFIX):]
+    return None
+
+
+#: the boolean operators a stream of booleans is written with (Lustre's and FRETish's)
+_BOOLEAN_OPS = frozenset({"!", "&", "|", "->", "xor", "<->"})
+
+
+def reads_itself_as_bit(e: A.Expr, name: str, is_boolean: Any) -> bool:
+    """Whether the definition ``e`` of the boolean stream ``name`` reads ``name`` at least
+    once, each time as ``preBool(b, name)`` (``b`` a literal), and reads only booleans:
+    boolean variables (``is_boolean(v)``, ``name`` included), literals, the boolean
+    operators, ``ite`` and ``preBool`` with a literal first value (module docstring: one
+    state bit then computes it). Iterative."""
+    found = False
+    stack = [e]
+    while stack:
+        x = stack.pop()
+        if _occurrence(x, name):
+            found = True
+        elif isinstance(x, A.Var):
+            if x.name == name or not (x.name == "FTP" or is_boolean(x.name)):
+                return False
+        elif isinstance(x, A.Unary) and x.op in _BOOLEAN_OPS:
+            stack.append(x.operand)
+        elif isinstance(x, A.Binary) and x.op in _BOOLEAN_OPS:
+            stack += [x.left, x.right]
+        elif isinstance(x, A.Call) and x.name == "ite" and len(x.args) == 3:
+            stack += list(x.args)
+        elif (isinstance(x, A.Call) and x.name == "preBool" and len(x.args) == 2
+              and isinstance(x.args[0], A.BoolLit)):
+            if _mentions(x.args[1], name):  # (s two ticks ago, or a formula of it: no bit)
+                return False
+            stack.append(x.args[1])
+        elif not isinstance(x, A.BoolLit):
+            return False
+    return found
+
+
+def stream_expansion(e: A.Expr, name: str) -> A.Expr:
+    """The call ``STREAM_PREFIX + name`` of ``(P, Q)`` (module docstring): ``P`` is ``e``
+    with each ``preBool(b, name)`` read as ``true`` after the first instant and ``b`` at it
+    (``!FTP | b``, folded), ``Q`` with it ``false`` after and ``b`` at it (``FTP & b``), for a
+    definition :func:`reads_itself_as_bit` accepts (its other definitions expanded)."""
+    def at(after: bool) -> Any:
+        def occurrence(b: bool) -> A.Expr:
+            if b == after:
+                return A.BoolLit(b)
+            return A.Unary("!", A.Var("FTP")) if after else A.Var("FTP")
+        return occurrence
+
+    return A.Call(STREAM_PREFIX + name, (_replaced_by(e, name, at(True)),
+                                         _replaced_by(e, name, at(False))))
+
+
+def _replaced_by(e: A.Expr, name: str, by: Any) -> A.Expr:
+    """``e`` with each ``preBool(b, name)`` replaced by ``by(b)``, literals folded
+    (:func:`_folded`)."""
+    first = _first(e, name)
+    if first is not None:
+        return by(first)
+    if not _mentions(e, name):
+        return e
+    if isinstance(e, A.Unary):
+        return _folded(A.Unary(e.op, _replaced_by(e.operand, name, by)))
+    if isinstance(e, A.Binary):
+        return _folded(A.Binary(e.op, _replaced_by(e.left, name, by),
+                                _replaced_by(e.right, name, by)))
+    if isinstance(e, A.Call):
+        return _folded(A.Call(e.name, tuple(_replaced_by(a, name, by) for a in e.args)))
+    return e
 
 
 def _first(x: A.Expr, name: str) -> bool | None:

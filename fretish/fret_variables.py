@@ -112,8 +112,8 @@ def declare(entry: Any, declared: list[FretVariable]) -> None:
     entry.outputs = tuple(dict.fromkeys(v.name for v in own if v.kind == "Output"))
 
 
-def with_fret_definitions(entry: Any, keep: Collection[str] = (), streams: bool = False
-                          ) -> Any:
+def with_fret_definitions(entry: Any, keep: Collection[str] = (), streams: bool = False,
+                          bits: bool = False) -> Any:
     """``entry`` (:class:`fretc.fretish.entry.RequirementEntry`) with each Internal variable
     of its FRET export that FRET defines replaced by its definition in its requirement's
     expressions (conditions, response, stop condition, a scope's condition or mode): a
@@ -125,10 +125,12 @@ def with_fret_definitions(entry: Any, keep: Collection[str] = (), streams: bool 
     its ``streams``, computed tick by tick from the variables they read
     (:func:`fretc.fretish.fret_streams.stream_system`). The entry itself when there is
     none of either. Without ``streams`` (the analyses), a boolean stream monotone in its
-    previous value is its past-time formula (:mod:`fretc.fretish.fret_since`), exact."""
+    previous value is its past-time formula (:mod:`fretc.fretish.fret_since`), exact; with
+    ``bits`` too (``fretc check``, ``fretc shield``), a boolean stream of booleans is its
+    one-bit machine (:func:`fretc.fretish.fret_definitions.definitions`' ``bits``)."""
     # (the monitors compute every stream tick by tick: no since there)
-    values = {k: v for k, v in definitions(tuple(entry.variables), not streams).values.items()
-              if k not in keep}
+    defs = definitions(tuple(entry.variables), not streams, bits and not streams)
+    values = {k: v for k, v in defs.values.items() if k not in keep}
     req = entry.requirement
     if req is None or req.freeform:
         return entry
@@ -179,13 +181,18 @@ PAST_NOTE = ("that definition is a stream with state monotone in its previous va
              "exactly the past-time formula P S psi (P: the definition with its pre true, "
              "psi: with its pre false, or its first value at the first tick)")
 
+#: what the notes say of a boolean stream of booleans read by its state bit
+#: (:func:`fretc.fretish.fret_since.stream_expansion`)
+BIT_NOTE = ("that definition is a boolean stream with state reading booleans only: "
+            "exactly a machine with one state bit, its previous value")
+
 #: how the analyses use a FRET definition (:func:`unused`'s sentence)
 ANALYSIS_USE = "in the analysis (the emitted formulas keep its name)"
 
 
 def unused(variables: list[FretVariable] | tuple[FretVariable, ...], read: set[str],
            whole: Collection[str] = (), use: str = ANALYSIS_USE,
-           streams: bool = False, stream_use: str = "") -> list[str]:
+           streams: bool = False, stream_use: str = "", bits: bool = False) -> list[str]:
     """What the FRET declarations of the variables in ``read`` say, and how fretc reads
     it, one sentence per variable (sorted by name): an Internal variable's definition used
     (:func:`with_fret_definitions`) or why it is not (then a free variable), a Mode or Function
@@ -197,8 +204,9 @@ def unused(variables: list[FretVariable] | tuple[FretVariable, ...], read: set[s
     runtime monitors: :mod:`fretc.fretish.fret_streams`), not free. ``stream_use``: how an
     analysis reads a stream variable instead (``fretc check``: a comparison reading it as
     one reading its definition's variables, after "that definition is a stream with state
-    (...): "); either makes the variables a stream reads read."""
-    defs = definitions(tuple(variables), not streams)
+    (...): "); either makes the variables a stream reads read. ``bits``: the analysis reads
+    a boolean stream of booleans by its state bit (:func:`with_fret_definitions`)."""
+    defs = definitions(tuple(variables), not streams, bits and not streams)
     read = _through_definitions(read, {**defs.values, **(defs.streams if streams or stream_use
                                                             else {})})
     out = []
@@ -206,6 +214,9 @@ def unused(variables: list[FretVariable] | tuple[FretVariable, ...], read: set[s
         if v.name in defs.pasts:
             out.append(f"{v.name}: FRET defines it ({v.kind}) as "
                        f"{_short(v.assignment or v.mode_requirement)}; {PAST_NOTE}, {use}")
+        elif v.name in defs.bits:
+            out.append(f"{v.name}: FRET defines it (Internal) as {_short(v.assignment)}; "
+                       f"{BIT_NOTE}, {use}")
         elif v.kind == "Internal" and v.name in defs.values:
             what = "constant" if constant_of(v) is not None else "definition"
             out.append(f"{v.name}: FRET defines it (Internal) as {_short(v.assignment)}; "
@@ -259,15 +270,16 @@ def _short(text: str, limit: int = 160) -> str:
 
 
 def fret_declarations(entries: list, whole: Collection[str] = (), use: str = ANALYSIS_USE,
-                      streams: bool = False, stream_use: str = "") -> tuple[list, list[str]]:
+                      streams: bool = False, stream_use: str = "", bits: bool = False
+                      ) -> tuple[list, list[str]]:
     """``entries`` with their FRET export's definitions applied
     (:func:`with_fret_definitions`, with ``streams`` as there: the runtime monitors), and
     the notes of :func:`unused` (``whole``, ``use``, ``streams`` and ``stream_use`` as
     there) over the variables they read as written (``fretc check``'s and ``fretc
-    shield``'s); ``entries`` and no note when none comes from an export that declares
-    variables."""
+    shield``'s; ``bits`` as :func:`with_fret_definitions`'); ``entries`` and no note when
+    none comes from an export that declares variables."""
     declared = list({(v.component, v.name): v for e in entries for v in e.variables}.values())
     if not declared:
         return entries, []
-    notes = unused(declared, names_read(entries), whole, use, streams, stream_use)
-    return [with_fret_definitions(e, streams=streams) for e in entries], notes
+    notes = unused(declared, names_read(entries), whole, use, streams, stream_use, bits)
+    return [with_fret_definitions(e, streams=streams, bits=bits) for e in entries], notes
