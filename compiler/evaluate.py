@@ -188,7 +188,7 @@ class _Evaluator:
         return out
 
     def _past(self, n: Node) -> list[Any]:
-        """Y, Z, O, H, S, T: forward over positions 0..L-1 (the absorbing state reads as
+        """Y, Z, O, H, S, T, stream: forward over positions 0..L-1 (the absorbing state reads as
         false)."""
         L, op, a = self.L, n.op, n.args
         if op in ("Y", "Z"):
@@ -212,7 +212,9 @@ class _Evaluator:
         out = []
         prev = op == "T"
         for i in range(L):
-            if op == "S":
+            if op == "stream":  # (ir.stream: x when it held at i-1, else y)
+                prev = x[i] if prev else y[i]
+            elif op == "S":
                 prev = y[i] or (x[i] and prev)
             else:
                 prev = y[i] and (x[i] or prev)
@@ -221,7 +223,7 @@ class _Evaluator:
 
 
 _FUTURE_OPS = frozenset(("X", "F", "G", "U", "V"))
-_PAST_OPS = frozenset(("Y", "Z", "O", "H", "S", "T"))
+_PAST_OPS = frozenset(("Y", "Z", "O", "H", "S", "T", "stream"))
 _BOOL_BINARY = {"&": lambda p, q: p and q, "|": lambda p, q: p or q,
                 "xor": lambda p, q: p != q, "->": lambda p, q: (not p) or q,
                 "<->": lambda p, q: p == q}

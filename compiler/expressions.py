@@ -10,7 +10,7 @@ the response, condition, stop and scope expressions of a requirement.
 from __future__ import annotations
 
 from fretc.fretish import ast as A
-from fretc.fretish.fret_since import SINCE
+from fretc.fretish.fret_since import SINCE, stream_name
 from fretc.common.errors import FretishError
 from fretc.fretish.limits import MAX_DURATION_TICKS, duration_too_long
 
@@ -116,6 +116,10 @@ class Expander:
         if name == "ite" and len(args) == 3:
             c, a, b = (self.bool(x) for x in args)
             return Node("|", (Node("&", (c, a)), Node("&", (not_(c), b))))
+        if stream_name(e) is not None:  # (a stream by its state bit: fret_since)
+            px = Expander("pt", self.left_pt, self.right_ft, self.free)
+            got = ir.stream(str(stream_name(e)), px.bool(args[0]), px.bool(args[1]))
+            return got if self.kind == "pt" else Node("past", (got,), name=_call_text(e))
         if name in _PAST_FUNCS and name not in ("preInt", "preReal"):
             expansion = self._past_function(e)
             if self.kind == "pt":
@@ -293,7 +297,8 @@ _TIME_NAMES = _PAST_FUNCS | _FUTURE_FUNCS
 def mentions_time(e: A.Expr) -> bool:
     """Does the expression use a temporal function or FTP (whose meaning depends on the
     formula kind and the scope)?"""
-    return any((isinstance(n, A.Call) and n.name in _TIME_NAMES)
+    return any((isinstance(n, A.Call) and (n.name in _TIME_NAMES
+                                           or stream_name(n) is not None))
                or (isinstance(n, A.Var) and n.name == "FTP") for n in A.walk(e))
 
 

@@ -13,6 +13,7 @@ requirement's expression or text.
 from __future__ import annotations
 
 from fretc.fretish import ast as A
+from fretc.fretish.fret_since import stream_name
 
 from fretc.compiler import ir
 from fretc.compiler.expressions import _TIME_NAMES, Expander
@@ -77,7 +78,7 @@ class PlainExpander(Expander):
         return node  # no preInt/preReal here (they raise Timed): never a derived atom
 
     def _bool_call(self, e: A.Call) -> Node:
-        if e.name in _TIME_NAMES:
+        if e.name in _TIME_NAMES or stream_name(e) is not None:  # (a stream: fret_since)
             raise Timed
         return Expander._bool_call(self, e)
 

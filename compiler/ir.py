@@ -21,6 +21,10 @@ A node is ``Node(op, args, name, lo, hi)``:
 ``Y`` ``Z``               previous (strong, false at 0) / weak previous (true at 0)
 ``O`` ``H``               once / historically, optional bounds ``[lo, hi]`` in ticks
 ``S`` ``T``               since, trigger (``a T b`` = ``!(!a S !b)``)
+``stream``                a FRET boolean stream ``name`` of booleans by its state bit
+                          (pt): ``(P, Q)``, true at ``t`` iff ``P`` when it was true at
+                          ``t-1``, else ``Q`` (false before the trace; ``a S b`` is
+                          ``(a | b, b)``); :mod:`fretc.fretish.fret_since`
 ``var`` ``num``           numeric variable ``name``; numeric literal (text in ``name``)
 ``arith``                 ``name`` in ``+ - * / mod ^`` on two terms; ``neg`` unary minus
 ``fn``                    numeric function ``name(args)`` (``absReal``, ``preReal`` ...)
@@ -360,6 +364,15 @@ def T(a: Node, b: Node) -> Node:
 
 
 # --------------------------------------------------------------------------- terms
+def stream(name: str, p: Node, q: Node) -> Node:
+    """The boolean stream ``name`` by its state bit (module docstring's ``stream``): at each
+    position ``p`` when the stream was true at the previous one, else ``q`` (``q`` at the
+    first). A constant ``p`` and ``q`` that agree are that constant."""
+    if p == q and p.op in ("true", "false"):
+        return p
+    return Node("stream", (p, q), name=name)
+
+
 def var(name: str) -> Node:
     """A numeric variable (a term)."""
     return Node("var", name=name)

@@ -18,7 +18,7 @@ import functools
 import re
 
 from fretc.fretish import ast as A
-from fretc.fretish.fret_since import SINCE
+from fretc.fretish.fret_since import SINCE, stream_name
 from fretc.fretish.words import FRET_RESERVED, RESERVED_LETTERS, RESERVED_WORDS
 
 from fretc.compiler.ir import Node, name_of
@@ -121,6 +121,8 @@ def _smv_text(n: Node, ftp: str, memo: str) -> str:
         return f"ite({','.join(_smv(a, ftp, memo) for a in args)})"
     if op in ("past", "future"):  # a derived atom: its name, or its formula
         return n.name if n.name else sub(0)
+    if op == "stream":  # (a FRET stream by its state bit: its name)
+        return mangle(n.name)
     if len(args) == 2:
         return f"({sub(0)} {op} {sub(1)})"
     if n.hi is None:
@@ -191,6 +193,8 @@ def expr_text(e: A.Expr) -> str:
         return f"({expr_text(e.left)} {e.op} {expr_text(e.right)})"
     if isinstance(e, A.Call) and e.name == SINCE and len(e.args) == 2:
         return f"({expr_text(e.args[0])} S {expr_text(e.args[1])})"  # (FRET's pt since)
+    if isinstance(e, A.Call) and stream_name(e) is not None:  # (a stream by its state bit)
+        return mangle(str(stream_name(e)))
     if isinstance(e, A.Call):
         return f"{mangle(e.name)}({','.join(expr_text(a) for a in e.args)})"
     raise TypeError(type(e))
