@@ -3,7 +3,8 @@ game (:mod:`fretc.check.safety_game`) and the satisfiability fixed points (:mod:
 
 A pt formula's monitor is a deterministic machine whose state is the previous tick's value of
 each past-time sub-formula (Havelund & Rosu, "Synthesizing monitors for safety properties",
-TACAS 2002): one bit per ``Y``, ``Z``, ``O``, ``H``, ``S``, ``T``; for a bounded ``O[0,w] x``
+TACAS 2002): one bit per ``Y``, ``Z``, ``O``, ``H``, ``S``, ``T`` and FRET boolean stream
+(IR ``stream``: its previous value, the next its value now); for a bounded ``O[0,w] x``
 the ticks since ``x`` last held, saturated (``log2 w`` bits); ``O[l,h] x`` is ``O[0,h-l]`` of
 ``x`` delayed ``l`` ticks (``l`` bits of delay line).
 
@@ -64,7 +65,7 @@ def state_bits(n: Node, seen: set, counted: frozenset = frozenset()) -> tuple[in
         # the deadline's counter, and room for the counters of its O[0,N-1] in the block
         return d1 + d2, o1 + o2 + 2 * (N + 1).bit_length() + 4
     delay = other = 0
-    if n.op in ("Y", "Z", "O", "H", "S", "T", "FTP"):
+    if n.op in ("Y", "Z", "O", "H", "S", "T", "FTP", "stream"):
         other = 1
         if n.hi is not None:
             lo = n.lo or 0
@@ -258,6 +259,11 @@ class Monitor:
             v, bit = self._bit(op == "Z")
             bit[3] = self.value(n.args[0])
             return v
+        if op == "stream":  # (its previous value, false before the trace: ir.stream)
+            prev, bit = self._bit(False)
+            now = b.bdd_ite(prev, self.value(n.args[0]), self.value(n.args[1]))
+            bit[3] = now
+            return now
         if op in ("O", "H", "S", "T"):
             prev, bit = self._bit(op in ("H", "T"))
             a = self.value(n.args[0])

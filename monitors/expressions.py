@@ -21,7 +21,7 @@ from fretc.compiler.expressions import Expander, SemanticsError
 from fretc.compiler.ir import TRUE
 from fretc.compiler.printers import to_smv
 from fretc.fretish import ast as A
-from fretc.fretish.fret_since import SINCE
+from fretc.fretish.fret_since import SINCE, stream_name
 
 from fretc.monitors.arrays import COMPARISONS, CONNECTIVES, arith, connective, py_max, py_min, shifted
 
@@ -243,7 +243,20 @@ class ColumnExpressions:
             return self._prev_occ(p, q) if name == "prevOcc" else self._next_occ(p, q)
         if name == SINCE and len(args) == 2:
             return self._since(self.bool(args[0]), self.bool(args[1]))
+        if stream_name(e) is not None:
+            return self._stream(self.bool(args[0]), self.bool(args[1]))
         return self.uninterpreted(e, numeric=False)
+
+    def _stream(self, p: np.ndarray, q: np.ndarray) -> np.ndarray:
+        """A FRET boolean stream by its state bit (:func:`fretc.fretish.fret_since.
+        stream_expansion`): ``p`` at a tick where it held at the previous one, else ``q``
+        (``q`` at the first), tick by tick as :mod:`fretc.compiler.stream_code` computes
+        it; false in the absorbing state (a derived past atom)."""
+        out = np.zeros(self.N, dtype=np.bool_)
+        prev = False
+        for t, (x, y) in enumerate(zip(p[:self.n].tolist(), q[:self.n].tolist())):
+            prev = out[t] = x if prev else y
+        return out
 
     def _since(self, a: np.ndarray, c: np.ndarray) -> np.ndarray:
         """``a S c`` over the whole trace (a FRET stream monotone in its previous value,
