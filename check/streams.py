@@ -7,7 +7,10 @@ tick from the variables its definition reads, now and at earlier ticks
 (:mod:`fretc.fretish.fret_streams`), as FRET's realizability reads an Internal variable: its
 definition. A boolean stream monotone in its previous value (a latch) is exactly a
 past-time formula of them, which the analyses read (:mod:`fretc.fretish.fret_since`): it is
-no stream here. Of the others, no expression of those variables' present values writes it, so the analyses
+no stream here; nor is another boolean stream reading booleans only, which ``fretc check``
+reads by its state bit (IR ``stream``: the requirements' expansions name no variable of it,
+so no requirement reads it as a variable here). Of the others (numeric streams, boolean
+ones reading a number), no expression of those variables' present values writes it, so the analyses
 read a comparison that reads it as they read a comparison reading a previous value
 (``preReal``): an independent proposition at each tick (an ``abstraction`` note names the
 stream), whose role in realizability is that of the variables its definition reads, by the
@@ -44,9 +47,9 @@ class CheckStream:
     definition reads from outside the streams (sorted; the inputs of
     :class:`fretc.fretish.fret_streams.StreamSystem`, through the streams it reads);
     ``text`` its definition as FRET wrote it; ``boolean`` whether it is a truth value (a
-    boolean stream here is one not monotone in its previous value, or reading one: those
-    that are, the analyses read as past-time formulas, :mod:`fretc.fretish.fret_since`),
-    else a real number."""
+    boolean stream here is one reading a number or a numeric stream: one reading booleans
+    only, ``fretc check`` and ``fretc shield`` read as a past-time formula or by its state
+    bit, :mod:`fretc.fretish.fret_since`; testgen reads it here), else a real number."""
 
     name: str
     reads: tuple[str, ...]

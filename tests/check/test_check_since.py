@@ -41,9 +41,11 @@ def _no_stream(doc: dict) -> None:
 
 def test_the_latch_is_exact_where_a_free_stream_was_not(tmp_path):
     """``exit & !enter`` resets the latch: o may be false then, so the set is realizable.
-    A stream not monotone in its previous value in its place (``pre m xor exit``) is read
-    as an independent proposition of the environment's, which could be true at such a
-    tick: the environment's win proves nothing, unknown."""
+    A stream not monotone in its previous value in its place (``pre m xor exit``) reads
+    booleans only: check reads it by its state bit (tests/check/test_stream_bits.py), no
+    stream, and exactly: ``exit & !enter`` after a tick where it was false makes it true,
+    so o must be true and false, unrealizable (read as an independent proposition of the
+    environment's, as before, the answer was unknown)."""
     texts = ["whenever m ctrl shall immediately satisfy o",
              "whenever exit & !enter ctrl shall immediately satisfy !o"]
     code, doc = _check(tmp_path, texts)
@@ -52,9 +54,9 @@ def test_the_latch_is_exact_where_a_free_stream_was_not(tmp_path):
     _no_stream(doc)
     (tmp_path / "t").mkdir()
     code, doc = _check(tmp_path / "t", texts, "false -> (enter or (pre m xor exit))")
-    assert doc["realizability"]["streams"]["m"]["role"] == "input"
+    assert "streams" not in doc["realizability"], doc["realizability"]
     assert code == 1 and [g["realizable"] for g in doc["realizability"]["groups"]] \
-        == ["unknown"], doc
+        == [False], doc
 
 
 def test_the_latch_set_by_enter_is_unrealizable_with_the_latch_read_exactly(tmp_path):

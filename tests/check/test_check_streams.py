@@ -39,26 +39,32 @@ def _write(tmp_path: Path, texts: list[str], variables: list[dict]) -> Path:
     return path
 
 
+#: a boolean stream reading a number (tests/check/test_stream_bits.py: one reading booleans
+#: only is no stream for check)
+_NUMERIC = "b -> (b xor (pre latched and x > 1.0))"
+
+
 def test_a_stream_read_by_one_requirement_takes_its_definitions_role(tmp_path):
-    """Two variables, ``b`` (Input) and ``o`` (Output), and ``latched`` := ``b -> (b xor pre
-    latched)`` (not monotone in its previous value: a stream for check; a monotone one is a
-    past-time formula, tests/check/test_check_since.py): R1 is checked (not "declared
-    neither"), ``latched`` is the environment's (its
-    definition reads the input b), the controller answers it (o true), and the notes name
-    the stream."""
+    """Three variables, ``b``, ``x`` (Inputs) and ``o`` (Output), and ``latched`` := ``b ->
+    (b xor (pre latched and x > 1.0))`` (a boolean stream reading a number: a stream for
+    check; one reading booleans only is read by its state bit, tests/check/
+    test_stream_bits.py, a monotone one as a past-time formula, tests/check/
+    test_check_since.py): R1 is checked (not "declared neither"), ``latched`` is the
+    environment's (its definition reads the inputs b and x), the controller answers it (o
+    true), and the notes name the stream."""
     path = _write(tmp_path, ["whenever latched ctrl shall immediately satisfy o"], [
-        _var("b", "Input", "boolean"), _var("o", "Output", "boolean"),
-        _var("latched", "Internal", "boolean", "b -> (b xor pre latched)")])
+        _var("b", "Input", "boolean"), _var("x", "Input", "double"),
+        _var("o", "Output", "boolean"), _var("latched", "Internal", "boolean", _NUMERIC)])
     code, doc = _check(path)
     rz = doc["realizability"]
     assert code == 0, doc
-    assert rz["undeclared"] == [] and rz["inputs"] == ["b"] and rz["outputs"] == ["o"]
-    assert rz["streams"] == {"latched": {"reads": ["b"], "role": "input"}}
+    assert rz["undeclared"] == [] and rz["inputs"] == ["b", "x"] and rz["outputs"] == ["o"]
+    assert rz["streams"] == {"latched": {"reads": ["b", "x"], "role": "input"}}
     assert [g["realizable"] for g in rz["groups"]] == [True]
     assert not [f for f in doc["findings"] if f["kind"] == "undeclared"]
     [note] = [a for a in doc["abstractions"] if a["atom"] == "latched"]
     assert "stream variable latched" in note["why"] and "reads b" in note["why"]
-    assert any(n.startswith("latched: FRET defines it (Internal) as b -> (b xor pre latched); "
+    assert any(n.startswith(f"latched: FRET defines it (Internal) as {_NUMERIC}; "
                             "that definition is a stream with state (it reads itself "
                             "through pre): fretc check reads") for n in doc["notes"])
 
@@ -82,8 +88,8 @@ def test_a_streams_undeclared_input_is_named_with_the_stream(tmp_path):
     """A variable the definition reads that is declared neither (FRET's rule) is named with
     the stream reading it and the requirement reading the stream: exit 2."""
     path = _write(tmp_path, ["whenever latched ctrl shall immediately satisfy o"], [
-        _var("z", "", "boolean"), _var("o", "Output", "boolean"),
-        _var("latched", "Internal", "boolean", "z -> (z xor pre latched)")])
+        _var("z", "", "boolean"), _var("x", "Input", "double"), _var("o", "Output", "boolean"),
+        _var("latched", "Internal", "boolean", _NUMERIC.replace("b", "z"))])
     code, doc = _check(path)
     assert code == 2, doc
     [found] = [f for f in doc["findings"] if f["kind"] == "undeclared"]
@@ -158,8 +164,8 @@ def test_witnesses_of_a_stream_say_its_column_is_computed(tmp_path):
     """The witness of a set reading a stream carries the stream's column computed from its
     inputs' (:mod:`fretc.check.stream_rows`); a note says so."""
     path = _write(tmp_path, ["whenever latched ctrl shall immediately satisfy o"], [
-        _var("b", "Input", "boolean"), _var("o", "Output", "boolean"),
-        _var("latched", "Internal", "boolean", "b -> (b xor pre latched)")])
+        _var("b", "Input", "boolean"), _var("x", "Input", "double"),
+        _var("o", "Output", "boolean"), _var("latched", "Internal", "boolean", _NUMERIC)])
     code, doc = _check(path, "--witness-dir", str(tmp_path / "w"))
     assert code == 0 and doc["witnesses"], doc
     assert any(n.startswith("the witnesses' columns of the stream variable latched are "

@@ -15,27 +15,32 @@ from fretc.cli import main
 
 
 def _export(tmp_path: Path, texts: list[str]) -> Path:
-    def var(name: str, kind: str, assignment: str = "") -> dict:
+    def var(name: str, kind: str, assignment: str = "", data_type: str = "boolean") -> dict:
         return {"project": "P", "component_name": "ctrl", "variable_name": name,
-                "idType": kind, "dataType": "boolean", "assignment": assignment}
+                "idType": kind, "dataType": data_type, "assignment": assignment}
 
     path = tmp_path / "p.json"
     path.write_text(json.dumps({"requirements": [
         {"reqid": f"R{k + 1}", "project": "P", "fulltext": t} for k, t in enumerate(texts)],
         "variables": [var("b", "Input"), var("o", "Output"),
-                      var("latched", "Internal", "b -> (b xor pre latched)")]}),
+                      var("latched", "Internal", "b -> (b xor pre latched)"),
+                      var("x", "Input", data_type="double"),
+                      var("g", "Internal", "b -> (b xor (pre g and x > 1.0))")]}),
         encoding="utf-8")
     return path
 
 
 def test_shield_refuses_a_stream_variable_by_name(tmp_path):
-    path = _export(tmp_path, ["whenever latched ctrl shall immediately satisfy o",
+    """A boolean stream reading a number (``g``; ``latched``, reading booleans only, is
+    enforced by its state bit: tests/shield/test_shield_stream_bits.py)."""
+    path = _export(tmp_path, ["whenever g ctrl shall immediately satisfy o",
                               "whenever b ctrl shall immediately satisfy o"])
     got = CliRunner().invoke(main, ["shield", str(path), "-o", str(tmp_path / "out")])
     assert got.exit_code == 2, got.output
-    assert "R1 reads the FRET stream variable latched (its definition b -> (b xor pre " \
-           "latched) reads b now and through pre; a boolean stream not monotone in its " \
-           "previous value (or reading one) is no past-time formula" in got.output
+    assert "R1 reads the FRET stream variable g (its definition b -> (b xor (pre g and x > " \
+           "1.0)) reads b, x now and through pre; a boolean stream reading a number, a " \
+           "comparison or a numeric stream holds what a real number decides" \
+           in " ".join(got.output.split())
     assert "the shield does not compute" in got.output
     got = CliRunner().invoke(main, ["shield", str(path), "--exclude", "R1",
                                     "-o", str(tmp_path / "out")])

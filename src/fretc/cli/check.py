@@ -208,7 +208,8 @@ def check_cmd(files: tuple[str, ...], inputs: str | None, outputs: str | None,
                                req_files + [("the binding file", bindings_file)],
                                [("--witness-dir", witness_dir)], req_folders)
     rs = requirement_set(files, bindings_file, component=component, only=only,
-                         exclude=exclude, tick_period=tick_period, stream_use=STREAM_USE)
+                         exclude=exclude, tick_period=tick_period, stream_use=STREAM_USE,
+                         bits=True)
     ins, outs = names_of(inputs), names_of(outputs)
     settings = _Settings(Budget(budget, memory_budget, query_cpu), mus_budget,
                          not no_redundancy, engine,

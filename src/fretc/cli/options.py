@@ -444,8 +444,11 @@ class RequirementSet:
 
     def __init__(self, as_written: list[Any], entries: list[Any], notes: list[str],
                  bindings: Any, component: str | None = None,
-                 every: list[Any] | None = None, stream_use: str = ""):
+                 every: list[Any] | None = None, stream_use: str = "", bits: bool = False):
         self.as_written, self.entries, self.notes = as_written, entries, notes
+        #: whether the boolean streams of booleans are read by their state bit
+        #: (:func:`fretc.fretish.fret_variables.with_fret_definitions`' ``bits``)
+        self.bits = bits
         self.bindings = bindings
         #: how the command reads a FRET stream variable, in its notes
         #: (:func:`fretc.fretish.fret_variables.unused`; "" a free variable)
@@ -474,10 +477,10 @@ class RequirementSet:
         for name in names:
             own = [e for e in self.entries if e.requirement.component == name]
             notes = fret_declarations([written[e.id] for e in own],
-                                      stream_use=self.stream_use)[1]
+                                      stream_use=self.stream_use, bits=self.bits)[1]
             out.append((name, RequirementSet(self.as_written, own, notes, self.bindings, name,
                                              _of_component(self.as_written, name),
-                                             self.stream_use)))
+                                             self.stream_use, self.bits)))
         return out
 
     @property
@@ -563,7 +566,8 @@ def _selected(entries: list[Any], only: str | None, exclude: str | None) -> list
 def requirement_set(files: Sequence[str], bindings_file: str | None, *,
                     component: str | None = None, only: str | None = None,
                     exclude: str | None = None,
-                    tick_period: str | None = None, stream_use: str = "") -> RequirementSet:
+                    tick_period: str | None = None, stream_use: str = "",
+                    bits: bool = False) -> RequirementSet:
     """Read requirement ``files`` (any format :func:`fretc.fretish.files.load_requirements`
     reads) with the ``-b`` binding file: each requirement's tick period is ``tick_period``
     (``--tick-period``, every requirement's, as in ``fretc audit``), else its file's
@@ -574,7 +578,9 @@ def requirement_set(files: Sequence[str], bindings_file: str | None, *,
     only), ``only``, ``exclude`` the options of :func:`selection_options`
     (:class:`RequirementSet`). Only the requirements selected need a period, and the notes
     on a FRET export's declarations are those of the variables they read (``stream_use``:
-    how the command reads a FRET stream variable, :func:`fretc.fretish.fret_variables.unused`).
+    how the command reads a FRET stream variable, :func:`fretc.fretish.fret_variables.unused`;
+    ``bits``: a boolean stream of booleans read by its state bit, ``fretc check``'s and
+    ``fretc shield``'s reading, :func:`fretc.fretish.fret_variables.with_fret_definitions`).
 
     Raises:
         FretcError: a file or binding file that cannot be read, no period known for a
@@ -599,7 +605,7 @@ def requirement_set(files: Sequence[str], bindings_file: str | None, *,
         every = chosen = _of_component(as_written, component)
     if only is not None or exclude is not None:
         chosen = _selected(chosen, only, exclude)
-    entries, notes = fret_declarations(chosen, stream_use=stream_use)  # (its constants)
+    entries, notes = fret_declarations(chosen, stream_use=stream_use, bits=bits)
     bindings, found = None, ""
     if bindings_file is not None:
         from fretc.signals.bindings.files import load_bindings
@@ -611,7 +617,8 @@ def requirement_set(files: Sequence[str], bindings_file: str | None, *,
     entries = with_periods(entries, bindings, found, override)
     if bindings_file is None:
         bindings = None  # (found beside: its period only)
-    return RequirementSet(as_written, entries, notes, bindings, component, every, stream_use)
+    return RequirementSet(as_written, entries, notes, bindings, component, every, stream_use,
+                          bits)
 
 
 def period_option_value(tick_period: str | None) -> Any:

@@ -131,7 +131,7 @@ def shield_cmd(files: tuple[str, ...], inputs: str | None, outputs: str | None,
         click.echo(shown(f"unknown: {exc}"), err=True)
         sys.exit(1)
     click.echo(shown(_summary(shield)))
-    for n in fret_declarations(as_written, shield.integers)[1]:  # (the notes of the integers)
+    for n in fret_declarations(as_written, shield.integers, bits=True)[1]:  # (the notes of the integers)
         click.echo(shown(f"  note: {n}"))
     code = 0
     if explain:
@@ -164,10 +164,10 @@ def _read(files: Sequence[str], assume: Sequence[str], bindings_file: str | None
 
     component, only, exclude = selection
     rs = requirement_set(files, bindings_file, component=component, only=only, exclude=exclude,
-                         tick_period=tick_period)
+                         tick_period=tick_period, bits=True)
     compiled = compile_entries(rs.entries)
-    assumed = (compile_entries(requirement_set(assume, bindings_file,
-                                               tick_period=tick_period).entries)
+    assumed = (compile_entries(requirement_set(assume, bindings_file, tick_period=tick_period,
+                                               bits=True).entries)
                if assume else [])
     taken = {c.id for c in compiled}
     twice = sorted({c.id for c in assumed if c.id in taken})
