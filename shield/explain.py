@@ -29,7 +29,7 @@ from typing import Any
 
 from fretc.check.safety_game import letter_name
 from fretc.compiler import ir
-from fretc.compiler.expressions import Expander
+from fretc.compiler.expressions import Expander, mentions_time
 from fretc.compiler.ir import Node
 from fretc.compiler.printers import to_smv
 from fretc.shield.build import Shield
@@ -190,6 +190,8 @@ def _unread(req: Any) -> str | None:
     and ``for``, ``next``, ``until``, ``never``, ``always`` after a condition and the rest
     ask for more than one response, or at one tick only."""
     kind = req.timing.kind or "null"
+    if any(e is not None and mentions_time(e) for e in (req.condition.expr, req.response)):
+        return "a condition or response reading the past (a past-time function, a stream)"
     if req.scope.kind != "null":
         return f"the '{req.scope.kind}' scope"
     if kind in ("immediately", "within") or (kind == "always" and req.condition.expr is None):

@@ -256,6 +256,13 @@ def prove_shield(shield: Shield, compiled: Sequence[Any]) -> Proof:
         for rid in m.requirements:
             phi = ir.fold_constants(by_id[rid].formalization.ft_inf)  # (as the game read it)
             proof.under[rid] = tuple(m.assumptions)
+            streams = _streams_read([phi, *assumed])
+            if streams:
+                proof.results[rid] = "unknown"
+                proof.why[rid] = (f"it reads the FRET stream variable(s) {streams} by a state "
+                                  "bit the game keeps, which Spot's formula reads as a free "
+                                  "proposition (a derived past atom)")
+                continue
             if max_bound([phi, *assumed]) > SPOT_MAX_BOUND:
                 proof.results[rid] = "unknown"
                 proof.why[rid] = (f"a bound of {max_bound([phi, *assumed])} ticks; Spot is "
@@ -274,6 +281,13 @@ def prove_shield(shield: Shield, compiled: Sequence[Any]) -> Proof:
                 run.simplify()
                 proof.why[rid] = f"a run of the closed loop violates it: {run}"
     return proof
+
+
+def _streams_read(formulas: list[Any]) -> str:
+    """The FRET streams read by their state bit (IR ``stream``,
+    :mod:`fretc.fretish.fret_since`) in ``formulas``, comma-separated ("" for none)."""
+    names = {str(n.name) for f in formulas for n in ir.walk(f) if n.op == "stream"}
+    return ", ".join(sorted(names))
 
 
 def _vacuity(proof: Proof, rid: str, compiled: Any, assumed: list[Any], aut: Any,
