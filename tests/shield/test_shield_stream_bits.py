@@ -1,0 +1,126 @@
+"""``fretc shield`` enforces a requirement reading a FRET boolean stream of booleans that is
+not monotone in its previous value (the toggle ``t := false -> (a xor pre t)``): the game
+keeps the toggle's state bit (IR ``stream``, check/pt_monitor.py), and the Python runtime
+and the C form, which execute the synthesized node tables, force ``o`` exactly at the ticks
+where the toggle, as the audit computes it (compiler/stream_code.py), is true. A numeric
+stream and a boolean stream reading a number are still refused, each with its reason."""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+import random
+import subprocess
+import types
+from pathlib import Path
+
+import numpy as np
+from click.testing import CliRunner
+
+from fretc.cli import main
+from fretc.compiler.stream_code import stream_columns
+from fretc.fretish.fret_streams import stream_system
+from fretc.fretish.fret_variables import fret_variables
+from fretc.shield.runtime import ShieldRuntime
+
+from _c_monitors import build, needs_cc
+
+TOGGLE = "false -> (a xor pre t)"
+
+
+def _export(tmp_path: Path, texts: list[str]) -> Path:
+    def var(name: str, kind: str, assignment: str = "", data_type: str = "boolean") -> dict:
+        return {"project": "P", "component_name": "ctrl", "variable_name": name,
+                "idType": kind, "dataType": data_type, "assignment": assignment}
+
+    path = tmp_path / "p.json"
+    path.write_text(json.dumps({"requirements": [
+        {"reqid": f"R{k + 1}", "project": "P", "fulltext": t} for k, t in enumerate(texts)],
+        "variables": [var("a", "Input"), var("o", "Output"),
+                      var("x", "Input", data_type="double"),
+                      var("t", "Internal", TOGGLE),
+                      var("g", "Internal", "false -> ((x > 1.0) xor pre g)"),
+                      var("h", "Internal", "x -> if a then x else pre h", "double")]}),
+        encoding="utf-8")
+    return path
+
+
+def _toggle(path: Path, a: list[bool]) -> list[bool]:
+    """The toggle over ``a`` as the audit computes it (Lustre's semantics)."""
+    variables = tuple(fret_variables(json.loads(path.read_text()), str(path)))
+    system = stream_system(variables, ["t"])
+    assert system is not None and system.inputs == ("a",)
+    return stream_columns(system, {"a": np.array(a)}, len(a))["t"].tolist()
+
+
+def _runs() -> list[list[bool]]:
+    rng = random.Random(11)
+    fixed = [False, True, False, False, True, True, False, True]
+    return [fixed] + [[rng.random() < 0.5 for _ in range(40)] for _ in range(8)]
+
+
+def test_the_shield_enforces_a_requirement_reading_a_toggle(tmp_path):
+    path = _export(tmp_path, ["whenever t ctrl shall immediately satisfy o"])
+    out = tmp_path / "out"
+    got = CliRunner().invoke(main, ["shield", str(path), "--emit", "python", "--emit", "c",
+                                    "-o", str(out)])
+    assert got.exit_code == 0, got.output
+    assert "enforces R1" in got.output and "stream variable" not in got.output
+    module = types.ModuleType("shield_toggle")
+    exec(compile((out / "p_shield.py").read_text(), "p_shield", "exec"), module.__dict__)
+    rt = ShieldRuntime(module.TABLES)
+    for a in _runs():
+        t = _toggle(path, a)
+        if len(a) == 8:  # (false at the first tick; flipped by each a after it)
+            assert t == [False, True, True, True, False, True, True, False]
+        for proposed in (False, True):
+            rt.reset()
+            for k, (ak, tk) in enumerate(zip(a, t)):
+                d = rt.step({"a": ak, "x": 0.0}, {"o": proposed})
+                want = True if tk else proposed
+                assert bool(d.outputs["o"]) == want, (a, k, d)
+                assert d.overridden == (want != proposed), (a, k, d)
+    # the C form, built with the strict flags and sanitizers, decides alike
+    needs_cc()
+    exe = build(out, ["p_shield.c", "p_shield_run.c"], "run")
+    for a in _runs():
+        t = _toggle(path, a)
+        for proposed in (False, True):
+            text = "a,x,o\n" + "".join(f"{'true' if ak else 'false'},0.0,"
+                                       f"{'true' if proposed else 'false'}\n" for ak in a)
+            ran = subprocess.run([str(exe)], input=text, capture_output=True, text=True,
+                                 timeout=60)
+            assert ran.returncode == 0 and not ran.stderr, ran.stderr
+            rows = list(csv.DictReader(io.StringIO(ran.stdout)))
+            assert [r["o"] == "1" for r in rows] == [tk or proposed for tk in t], (a, rows)
+            assert [r["overridden"] == "1" for r in rows] == [tk and not proposed for tk in t]
+
+
+def test_a_numeric_stream_and_a_boolean_one_reading_a_number_are_still_refused(tmp_path):
+    path = _export(tmp_path, ["whenever h > 2.0 ctrl shall immediately satisfy o",
+                              "whenever g ctrl shall immediately satisfy o"])
+    got = CliRunner().invoke(main, ["shield", str(path), "--exclude", "R2"])
+    assert got.exit_code == 2, got.output
+    assert ("R1 reads the FRET stream variable h (its definition x -> if a then x else "
+            "pre h reads a, x now and through pre; a numeric stream is a stored real "
+            "number, a memory of a past value: no finite game holds it)"
+            ) in " ".join(got.output.split())
+    got = CliRunner().invoke(main, ["shield", str(path), "--exclude", "R1"])
+    assert got.exit_code == 2, got.output
+    assert ("R2 reads the FRET stream variable g (its definition false -> ((x > 1.0) xor "
+            "pre g) reads x now and through pre; a boolean stream reading a number, a "
+            "comparison or a numeric stream holds what a real number decides, not a machine "
+            "of boolean state bits)") in " ".join(got.output.split())
+
+
+def test_the_proof_and_the_explanation_say_what_they_do_not_read(tmp_path):
+    """``--prove`` reads the requirement's ft_inf formula with Spot, where the toggle is a
+    derived past atom, a free proposition: unknown, naming the stream, not a false
+    violation; ``--explain`` does not read the liberties of a response over the past."""
+    path = _export(tmp_path, ["whenever t ctrl shall immediately satisfy o"])
+    got = CliRunner().invoke(main, ["shield", str(path), "--prove", "--explain"])
+    text = " ".join(got.output.split())
+    assert "R1: unknown (it reads the FRET stream variable(s) t by a state bit" in text, text
+    assert "violated" not in text
+    assert "R1: enforced as it reads (a condition or response reading the past" in text
