@@ -76,6 +76,9 @@ def _formula(node: Node, atom_of: dict[tuple[str, str], str], agent: str) -> str
         return "F"
     if op == "!":
         return f"~({_formula(node.args[0], atom_of, agent)})"
+    if op == "stream":  # (its state bit is the shield's, no belief: fretc.fretish.fret_since)
+        raise _Unstated(f"{node.name} is a FRET stream read by its state bit, not a formula "
+                        "over the shield's atoms")
     a = [_formula(x, atom_of, agent) for x in node.args]
     if op == "&":
         return f"({a[0]} & {a[1]})"

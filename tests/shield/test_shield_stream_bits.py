@@ -124,3 +124,24 @@ def test_the_proof_and_the_explanation_say_what_they_do_not_read(tmp_path):
     assert "R1: unknown (it reads the FRET stream variable(s) t by a state bit" in text, text
     assert "violated" not in text
     assert "R1: enforced as it reads (a condition or response reading the past" in text
+
+
+def test_the_gwendolen_form_steps_the_toggles_bit_as_the_python_form(tmp_path):
+    """The Gwendolen form's Java machine (javac) against the Python form, tick by tick:
+    decided atoms, next state (the toggle's bit among it) and broken flag equal; its
+    properties file says why it does not state R1 (the stream is the shield's state)."""
+    from test_gwendolen import java_steps, python_steps
+
+    path = _export(tmp_path, ["whenever t ctrl shall immediately satisfy o"])
+    out = tmp_path / "g"
+    got = CliRunner().invoke(main, ["shield", str(path), "--emit", "python", "--emit",
+                                    "gwendolen", "--name", "safe_ros", "-o", str(out)])
+    assert got.exit_code == 0, got.output
+    assert "not stated: t is a FRET stream read by its state bit" in \
+        (out / "safe_ros.psl").read_text(encoding="utf-8")
+    runs = [[({"a": ak, "x": 0.0}, {"o": proposed}) for ak in a]
+            for a in _runs() for proposed in (False, True)]
+    lines, want = python_steps(out, runs)
+    got_lines = java_steps(out, lines, tmp_path)
+    assert got_lines == want
+    assert any(w.split()[1] != "0" * len(w.split()[1]) for w in want)  # (the bit was set)
