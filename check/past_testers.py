@@ -17,7 +17,10 @@ of FRET's semantics (:mod:`fretc.compiler.evaluate`: position 0 is the first tic
 * ``O a`` = ``true S a``, ``H a`` = ``!O !a``; bounded ``O[lo,hi] a`` = ``Y^lo a | ... | Y^hi
   a`` and ``H[lo,hi] a`` = ``Z^lo a & ... & Z^hi a`` (a chain of testers, the window of
   :func:`fretc.compiler.ir.window`), up to :data:`MAX_WINDOW` ticks;
-* ``FTP``: ``t & X G !t``.
+* ``FTP``: ``t & X G !t``;
+* a FRET stream by its state bit (:func:`fretc.compiler.ir.stream`: ``p`` when it held at
+  the previous position, else ``q``): ``t`` its previous value, ``!t & G(X t <-> (t & p |
+  !t & q))``, its value ``t & p | !t & q``.
 
 The atom is then its expansion over the testers, a formula of the present position, and the
 trace's letters carry the testers (which no column reads). A past atom whose expansion holds
@@ -90,6 +93,13 @@ class _Testers:
             return self._since(a, b)
         if op in ("O", "H"):
             return self._window(n)
+        if op == "stream":  # (ir.stream: p when it held at the previous position, else q)
+            p, q = (self.of(x) for x in n.args)
+            t = self.fresh()
+            now = ir.or_(ir.and_(t, p), ir.and_(ir.not_(t), q))
+            step = ir.iff(ir.X(t), now)
+            self.axioms.append(ir.and_(ir.not_(t), ir.G(step)))
+            return now
         raise _Unsupported(op)
 
     def _previous(self, a: Node, weak: bool) -> Node:

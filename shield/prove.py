@@ -10,6 +10,10 @@ the atoms, and for each enforced requirement checks that its product with Spot's
 of the requirement's negated ft_inf formula (FRET's infinite-trace semantics, translated by
 Spot, not by the game) is empty: no run of the closed loop violates it. It also checks that
 the shield never blocks: every reachable state has a safe output for every consistent input.
+A derived past atom of an ft_inf formula (FRET's ``occurred``, ``persisted``, ``preBool``, a
+latch's since, a stream's state bit) is given to Spot as its expansion over temporal testers
+(:mod:`fretc.check.past_testers`), so a run is a violation only where the atom's expansion
+makes it one; one no tester writes leaves the answer unknown, naming it.
 
 The explicit system has at most :data:`MAX_STATES` states and each requirement's bounds at
 most :data:`fretc.check.checker.SPOT_MAX_BOUND` ticks (Spot's translation grows
@@ -39,9 +43,10 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from fretc.check.checker import SPOT_MAX_BOUND
+from fretc.check.past_testers import with_testers
 from fretc.check.smt import max_bound
 from fretc.compiler import ir
-from fretc.compiler.printers import to_spot
+from fretc.compiler.printers import to_smv, to_spot
 from fretc.shield.build import Shield
 from fretc.shield.machine import Machine
 
@@ -244,8 +249,9 @@ def prove_shield(shield: Shield, compiled: Sequence[Any]) -> Proof:
         proof.sizes.append((ids, aut.num_states(), aut.num_edges(), len(m.nodes)))
         assumed = [ir.fold_constants(by_id[a].formalization.ft_inf) for a in m.assumptions]
         if assumed and max_bound(assumed) <= SPOT_MAX_BOUND:
+            forms, axioms = with_testers(assumed)  # (past atoms: their expansions)
             keeps = spot.translate(spot.formula.And(
-                [spot.formula(to_spot(a)) for a in assumed]), dict=aut.get_dict())
+                [spot.formula(to_spot(a)) for a in forms + axioms]), dict=aut.get_dict())
             if spot.product(aut, keeps).accepting_word() is None:
                 for rid in m.requirements:
                     proof.under[rid] = tuple(m.assumptions)
@@ -256,12 +262,13 @@ def prove_shield(shield: Shield, compiled: Sequence[Any]) -> Proof:
         for rid in m.requirements:
             phi = ir.fold_constants(by_id[rid].formalization.ft_inf)  # (as the game read it)
             proof.under[rid] = tuple(m.assumptions)
-            streams = _streams_read([phi, *assumed])
-            if streams:
+            # (a derived past atom over testers: Spot reads it as its expansion)
+            forms, axioms = with_testers([*assumed, phi])
+            free = _free_pasts(forms)
+            if free:
                 proof.results[rid] = "unknown"
-                proof.why[rid] = (f"it reads the FRET stream variable(s) {streams} by a state "
-                                  "bit the game keeps, which Spot's formula reads as a free "
-                                  "proposition (a derived past atom)")
+                proof.why[rid] = (f"it reads {free}, which Spot's formula reads as a free "
+                                  "proposition (a derived past atom no tester writes)")
                 continue
             if max_bound([phi, *assumed]) > SPOT_MAX_BOUND:
                 proof.results[rid] = "unknown"
@@ -269,8 +276,8 @@ def prove_shield(shield: Shield, compiled: Sequence[Any]) -> Proof:
                                   f"given up to {SPOT_MAX_BOUND}")
                 continue
             neg = spot.translate(spot.formula.And(
-                [spot.formula(to_spot(a)) for a in assumed]
-                + [spot.formula.Not(spot.formula(to_spot(phi)))]), dict=aut.get_dict())
+                [spot.formula(to_spot(a)) for a in forms[:-1] + axioms]
+                + [spot.formula.Not(spot.formula(to_spot(forms[-1])))]), dict=aut.get_dict())
             run = spot.product(aut, neg).accepting_word()
             if run is None:
                 proof.results[rid] = "holds"
@@ -283,10 +290,11 @@ def prove_shield(shield: Shield, compiled: Sequence[Any]) -> Proof:
     return proof
 
 
-def _streams_read(formulas: list[Any]) -> str:
-    """The FRET streams read by their state bit (IR ``stream``,
-    :mod:`fretc.fretish.fret_since`) in ``formulas``, comma-separated ("" for none)."""
-    names = {str(n.name) for f in formulas for n in ir.walk(f) if n.op == "stream"}
+def _free_pasts(formulas: list[Any]) -> str:
+    """The derived past atoms left in ``formulas`` (those :func:`fretc.check.past_testers.
+    with_testers` could not write: a bounded window past its bound, a comparison reading a
+    previous value), by their printed text, comma-separated ("" for none)."""
+    names = {to_smv(n) for f in formulas for n in ir.walk(f) if n.op == "past"}
     return ", ".join(sorted(names))
 
 
@@ -302,9 +310,9 @@ def _vacuity(proof: Proof, rid: str, compiled: Any, assumed: list[Any], aut: Any
     trigger = make_item(0, compiled).trigger
     if trigger is None or max_bound([trigger, *assumed]) > SPOT_MAX_BOUND:
         return
+    forms, axioms = with_testers([*assumed, trigger])  # (past atoms: their expansions)
     fires = spot.translate(spot.formula.And(
-        [spot.formula(to_spot(a)) for a in assumed] + [spot.formula(to_spot(trigger))]),
-        dict=aut.get_dict())
+        [spot.formula(to_spot(a)) for a in forms + axioms]), dict=aut.get_dict())
     if spot.product(aut, fires).accepting_word() is None:
         proof.results[rid] = "vacuous"
         proof.why[rid] = (f"under {', '.join(names)} no run of the closed loop fires its "

@@ -25,7 +25,8 @@ _A, _B = ir.ap("a"), ir.ap("b")
 
 
 def _pt(depth: int) -> st.SearchStrategy[Node]:
-    """Random pt formulas over a and b: every past operator, bounded windows included."""
+    """Random pt formulas over a and b: every past operator, bounded windows included, and
+    a FRET stream by its state bit."""
     leaf = st.sampled_from([_A, _B, ir.FTP])
     if depth == 0:
         return leaf
@@ -39,6 +40,7 @@ def _pt(depth: int) -> st.SearchStrategy[Node]:
         sub.map(ir.Y), sub.map(ir.Z), sub.map(ir.O), sub.map(ir.H),
         st.tuples(sub, sub).map(lambda x: ir.S(*x)),
         st.tuples(sub, sub).map(lambda x: Node("T", x)),
+        st.tuples(sub, sub).map(lambda x: ir.stream("s", *x)),
         st.tuples(sub, bounds).map(lambda x: ir.O(x[0], *x[1])),
         st.tuples(sub, bounds).map(lambda x: ir.H(x[0], *x[1])))
 
