@@ -34,8 +34,9 @@ in pt, a derived ``past`` atom in ft, as FRET's other past-time functions) and p
 monotone in its previous value (a toggle ``false -> not pre t``: it counts modulo 2, no
 past-time formula of its inputs is it) and a numeric stream stay streams with state.
 
-A boolean stream that is not monotone but reads only booleans (no number, no comparison)
-and itself only as ``preBool(b, name)`` is still a deterministic machine with one bit of
+A boolean stream that is not monotone but reads only booleans and comparisons of the tick's
+values (no ``pre`` of a number: a comparison is an atom, as the game reads every one) and
+itself only as ``preBool(b, name)`` is still a deterministic machine with one bit of
 state, its previous value ``x`` (pt monitors keep one bit per past operator: Havelund &
 Rosu): ``s_t = P_t`` when ``s_(t-1)``, else ``Q_t``, with ``P``, ``Q`` the definition with
 each occurrence ``true``, ``false`` after the first instant and its own ``b`` at it (so
@@ -129,8 +130,9 @@ def reads_itself_as_bit(e: A.Expr, name: str, is_boolean: Any) -> bool:
     """Whether the definition ``e`` of the boolean stream ``name`` reads ``name`` at least
     once, each time as ``preBool(b, name)`` (``b`` a literal), and reads only booleans:
     boolean variables (``is_boolean(v)``, ``name`` included), literals, the boolean
-    operators, ``ite`` and ``preBool`` with a literal first value (module docstring: one
-    state bit then computes it). Iterative."""
+    operators, ``ite``, ``preBool`` with a literal first value, and comparisons of the
+    tick's values (no ``pre`` in them: each an atom, as every comparison is to the game;
+    module docstring: one state bit then computes it over the atoms). Iterative."""
     found = False
     stack = [e]
     while stack:
@@ -151,9 +153,20 @@ def reads_itself_as_bit(e: A.Expr, name: str, is_boolean: Any) -> bool:
             if _mentions(x.args[1], name):  # (s two ticks ago, or a formula of it: no bit)
                 return False
             stack.append(x.args[1])
+        elif isinstance(x, A.Binary) and x.op in A.COMPARISON_OPS:
+            if not _present_comparison(x, name):
+                return False
         elif not isinstance(x, A.BoolLit):
             return False
     return found
+
+
+def _present_comparison(x: A.Binary, name: str) -> bool:
+    """Whether the comparison ``x`` reads this tick's values only (no ``pre``, not the
+    stream ``name``): an atom of the tick, as the game and the monitors read every
+    comparison, so a stream reading it is still one state bit over the atoms."""
+    return not any((isinstance(y, A.Call) and y.name in ("preBool", "preInt", "preReal"))
+                   or (isinstance(y, A.Var) and y.name == name) for y in A.walk(x))
 
 
 def stream_expansion(e: A.Expr, name: str) -> A.Expr:

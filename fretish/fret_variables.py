@@ -183,8 +183,9 @@ PAST_NOTE = ("that definition is a stream with state monotone in its previous va
 
 #: what the notes say of a boolean stream of booleans read by its state bit
 #: (:func:`fretc.fretish.fret_since.stream_expansion`)
-BIT_NOTE = ("that definition is a boolean stream with state reading booleans only: "
-            "exactly a machine with one state bit, its previous value")
+BIT_NOTE = ("that definition is a boolean stream with state reading booleans and this "
+            "tick's comparisons only: exactly a machine with one state bit, its previous "
+            "value")
 
 #: how the analyses use a FRET definition (:func:`unused`'s sentence)
 ANALYSIS_USE = "in the analysis (the emitted formulas keep its name)"

@@ -212,8 +212,9 @@ def _refuse_streams(c: Any, undeclared: Sequence[str]) -> None:
     requirements' monitors over the inputs and outputs of one tick, and hold no state of a
     stream (``fretc check`` reads such a comparison as an independent proposition, which
     a shield cannot enforce). The reason names the kind: a numeric stream is a stored real
-    number; a boolean one that reads a number (or a stream that does) is not a machine
-    of boolean state bits. A boolean stream of booleans is none of these (a latch is its
+    number; a boolean one that reads a previous number (``pre`` of a number, or a numeric
+    stream) is not a machine of boolean state bits over the tick's atoms. A boolean stream
+    of booleans and of the tick's comparisons is none of these (a latch is its
     formula ``P S psi``, another its one-bit machine, IR ``stream``, and both are enforced:
     :mod:`fretc.fretish.fret_since`).
 
@@ -238,10 +239,12 @@ def _refuse_streams(c: Any, undeclared: Sequence[str]) -> None:
 #: why the shield cannot hold a numeric stream (:func:`_refuse_streams`)
 _NUMERIC = ("a numeric stream is a stored real number, a memory of a past value: no finite "
             "game holds it")
-#: why the shield cannot hold a boolean stream it is given (one reading booleans only is a
-#: machine of state bits, which the shield reads: :mod:`fretc.fretish.fret_since`)
-_NOT_PAST = ("a boolean stream reading a number, a comparison or a numeric stream holds "
-             "what a real number decides, not a machine of boolean state bits")
+#: why the shield cannot hold a boolean stream it is given (one reading booleans and the
+#: tick's comparisons only is a machine of state bits, which the shield reads:
+#: :mod:`fretc.fretish.fret_since`)
+_NOT_PAST = ("a boolean stream reading a previous number (pre of a number, or a numeric "
+             "stream) holds what a real number decides, not a machine of boolean state "
+             "bits over the tick's atoms")
 
 
 def _assumption(index: int, c: Any, inputs: Sequence[str], outputs: Sequence[str]

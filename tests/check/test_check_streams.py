@@ -39,15 +39,16 @@ def _write(tmp_path: Path, texts: list[str], variables: list[dict]) -> Path:
     return path
 
 
-#: a boolean stream reading a number (tests/check/test_stream_bits.py: one reading booleans
-#: only is no stream for check)
-_NUMERIC = "b -> (b xor (pre latched and x > 1.0))"
+#: a boolean stream reading a previous number (tests/check/test_stream_bits.py: one reading
+#: booleans and the tick's comparisons only is no stream for check)
+_NUMERIC = "b -> (b xor (pre latched and x > pre x))"
 
 
 def test_a_stream_read_by_one_requirement_takes_its_definitions_role(tmp_path):
     """Three variables, ``b``, ``x`` (Inputs) and ``o`` (Output), and ``latched`` := ``b ->
-    (b xor (pre latched and x > 1.0))`` (a boolean stream reading a number: a stream for
-    check; one reading booleans only is read by its state bit, tests/check/
+    (b xor (pre latched and x > pre x))`` (a boolean stream reading a previous number: a
+    stream for check; one reading booleans and the tick's comparisons only is read by its
+    state bit, tests/check/
     test_stream_bits.py, a monotone one as a past-time formula, tests/check/
     test_check_since.py): R1 is checked (not "declared neither"), ``latched`` is the
     environment's (its definition reads the inputs b and x), the controller answers it (o

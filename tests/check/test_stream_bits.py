@@ -113,10 +113,16 @@ def test_the_streams_that_were_left_free_are_exact(definition):
     assert "s" in definitions(_vars(definition)).streams
 
 
-def test_a_stream_reading_a_number_or_itself_otherwise_is_still_a_stream():
+def test_a_stream_reading_a_previous_number_or_itself_otherwise_is_still_a_stream():
+    """``pre x`` of a number (a comparison of two ticks' values), or ``s`` read two ticks
+    back or inside another ``pre``: no state bit computes it. A comparison of the tick's
+    values is an atom: ``(x > 1.0) xor pre s`` is one bit."""
     from fretc.fretish.fret_variables import FretVariable
 
-    for definition in ("false -> ((x > 1.0) xor pre s)", "a or pre (pre s)",
+    variables = (*_vars("false -> ((x > 1.0) xor pre s)"),
+                 FretVariable("c", "x", "Input", "double"))
+    assert "s" in definitions(variables, bits=True).bits
+    for definition in ("false -> ((x > pre x) xor pre s)", "a or pre (pre s)",
                        "a or (pre (s and b))"):
         variables = (*_vars(definition), FretVariable("c", "x", "Input", "double"))
         defs = definitions(variables, bits=True)
@@ -145,7 +151,8 @@ def _no_stream(doc: dict) -> None:
     assert not [a for a in doc["abstractions"] if "stream variable" in a["why"]]
     assert any(n.startswith("t: FRET defines it (Internal) as false -> (a xor pre t); that "
                             "definition is a boolean stream with state reading booleans "
-                            "only: exactly a machine with one state bit")
+                            "and this tick's comparisons only: exactly a machine with one "
+                            "state bit")
                for n in doc["notes"]), doc["notes"]
 
 

@@ -25,21 +25,21 @@ def _export(tmp_path: Path, texts: list[str]) -> Path:
         "variables": [var("b", "Input"), var("o", "Output"),
                       var("latched", "Internal", "b -> (b xor pre latched)"),
                       var("x", "Input", data_type="double"),
-                      var("g", "Internal", "b -> (b xor (pre g and x > 1.0))")]}),
+                      var("g", "Internal", "b -> (b xor (pre g and x > pre x))")]}),
         encoding="utf-8")
     return path
 
 
 def test_shield_refuses_a_stream_variable_by_name(tmp_path):
-    """A boolean stream reading a number (``g``; ``latched``, reading booleans only, is
+    """A boolean stream reading a previous number (``g``; ``latched``, reading booleans only, is
     enforced by its state bit: tests/shield/test_shield_stream_bits.py)."""
     path = _export(tmp_path, ["whenever g ctrl shall immediately satisfy o",
                               "whenever b ctrl shall immediately satisfy o"])
     got = CliRunner().invoke(main, ["shield", str(path), "-o", str(tmp_path / "out")])
     assert got.exit_code == 2, got.output
     assert "R1 reads the FRET stream variable g (its definition b -> (b xor (pre g and x > " \
-           "1.0)) reads b, x now and through pre; a boolean stream reading a number, a " \
-           "comparison or a numeric stream holds what a real number decides" \
+           "pre x)) reads b, x now and through pre; a boolean stream reading a previous " \
+           "number (pre of a number, or a numeric stream) holds what a real number decides" \
            in " ".join(got.output.split())
     assert "the shield does not compute" in got.output
     got = CliRunner().invoke(main, ["shield", str(path), "--exclude", "R1",

@@ -42,7 +42,8 @@ def _export(tmp_path: Path, texts: list[str]) -> Path:
                       var("x", "Input", data_type="double"),
                       var("t", "Internal", TOGGLE),
                       var("m", "Internal", "false -> (a or pre m)"),
-                      var("g", "Internal", "false -> ((x > 1.0) xor pre g)"),
+                      var("g", "Internal", "false -> ((x > pre x) xor pre g)"),
+                      var("k", "Internal", "false -> ((x > 1.0) xor pre k)"),
                       var("h", "Internal", "x -> if a then x else pre h", "double")]}),
         encoding="utf-8")
     return path
@@ -99,6 +100,31 @@ def test_the_shield_enforces_a_requirement_reading_a_toggle(tmp_path):
             assert [r["overridden"] == "1" for r in rows] == [tk and not proposed for tk in t]
 
 
+def test_a_stream_reading_a_comparison_of_the_tick_is_enforced_by_its_bit(tmp_path):
+    """``k := false -> ((x > 1.0) xor pre k)``: the comparison is an atom of the tick, so
+    ``k`` is one state bit over it; the shield's runtime forces ``o`` exactly where ``k``,
+    as the audit computes it from ``x``, is true."""
+    path = _export(tmp_path, ["whenever k ctrl shall immediately satisfy o"])
+    out = tmp_path / "out"
+    got = CliRunner().invoke(main, ["shield", str(path), "--emit", "python", "-o", str(out)])
+    assert got.exit_code == 0, got.output
+    module = types.ModuleType("shield_k")
+    exec(compile((out / "p_shield.py").read_text(), "p_shield", "exec"), module.__dict__)
+    rt = ShieldRuntime(module.TABLES)
+    variables = tuple(fret_variables(json.loads(path.read_text()), str(path)))
+    system = stream_system(variables, ["k"])
+    assert system is not None and system.inputs == ("x",)
+    rng = random.Random(5)
+    for _ in range(6):
+        x = [rng.choice([0.0, 0.5, 1.0, 1.5, 3.0]) for _ in range(30)]
+        k = stream_columns(system, {"x": np.array(x)}, len(x))["k"].tolist()
+        assert any(k) and not all(k)
+        rt.reset()
+        for xk, kk in zip(x, k):
+            d = rt.step({"a": False, "x": xk}, {"o": False})
+            assert bool(d.outputs["o"]) == kk and d.overridden == kk, (x, k, d)
+
+
 def test_a_numeric_stream_and_a_boolean_one_reading_a_number_are_still_refused(tmp_path):
     path = _export(tmp_path, ["whenever h > 2.0 ctrl shall immediately satisfy o",
                               "whenever g ctrl shall immediately satisfy o"])
@@ -110,10 +136,11 @@ def test_a_numeric_stream_and_a_boolean_one_reading_a_number_are_still_refused(t
             ) in " ".join(got.output.split())
     got = CliRunner().invoke(main, ["shield", str(path), "--exclude", "R1"])
     assert got.exit_code == 2, got.output
-    assert ("R2 reads the FRET stream variable g (its definition false -> ((x > 1.0) xor "
-            "pre g) reads x now and through pre; a boolean stream reading a number, a "
-            "comparison or a numeric stream holds what a real number decides, not a machine "
-            "of boolean state bits)") in " ".join(got.output.split())
+    assert ("R2 reads the FRET stream variable g (its definition false -> ((x > pre x) xor "
+            "pre g) reads x now and through pre; a boolean stream reading a previous number "
+            "(pre of a number, or a numeric stream) holds what a real number decides, not a "
+            "machine of boolean state bits over the tick's atoms)"
+            ) in " ".join(got.output.split())
 
 
 @pytest.mark.parametrize("text", ["whenever t ctrl shall immediately satisfy o",
