@@ -40,7 +40,7 @@ from typing import Any
 
 import numpy as np
 
-from fretc.compiler.stream_code import stream_columns
+from fretc.compiler.stream_code import _div, _mod, _pow, stream_columns
 from fretc.fretish import ast as A
 from fretc.fretish.fret_streams import FIRST_TICK, StreamSystem, stream_system
 
@@ -168,9 +168,8 @@ def value_at(e: A.Expr, rows: Sequence[Mapping[str, Any]], t: int) -> Any:
 def past_values(streams: TraceStreams, rows: Sequence[Mapping[str, Any]]) -> tuple[Any, ...]:
     """The value of every ``pre`` of ``streams``' definitions at the tick after ``rows``
     (what a tick's query reads of the past, :class:`TickTerms`), in a fixed order."""
-    t = len(rows)
-    padded = list(rows) + [{}]
-    return tuple(value_at(x, padded, t) for e in streams.exprs.values() for x in A.walk(e)
+    t = len(rows)  # (a pre at t reads the rows before t only)
+    return tuple(value_at(x, rows, t) for e in streams.exprs.values() for x in A.walk(e)
                  if isinstance(x, A.Call) and x.name in _PRE)
 
 
@@ -183,15 +182,7 @@ def _binary(op: str, a: Any, b: Any) -> Any:
              "-": lambda: a - b, "*": lambda: a * b}
     if op in logic:
         return logic[op]()
-    try:
-        if op == "/":
-            return a / b
-        if op == "mod":
-            return math.fmod(a, b)
-        r = a ** b
-        return math.nan if isinstance(r, complex) else r
-    except (ZeroDivisionError, ValueError, OverflowError):
-        return math.nan
+    return {"/": _div, "mod": _mod, "^": _pow}[op](a, b)
 
 
 class TickTerms:
@@ -199,8 +190,8 @@ class TickTerms:
     numeric variables as ``real(name)`` gives them (the caller's z3 Reals, shared with the
     comparisons it solves) and the boolean inputs' values ``letter_bool(name)`` gives (a
     bool, or None when the model's letter leaves it free: then a z3 Bool of this tick).
-    ``rows``: the rows of ticks ``0 .. t-1``, stream values included. ``pres``: each
-    ``pre`` operand's value read (the tick's query depends on nothing else of the past)."""
+    ``rows``: the rows of ticks ``0 .. t-1``, stream values included (the tick's query
+    reads nothing else of the past: :func:`past_values`)."""
 
     def __init__(self, z3: Any, streams: TraceStreams, rows: Sequence[Mapping[str, Any]],
                  real: Any, letter_bool: Any):
@@ -211,7 +202,6 @@ class TickTerms:
         self.real = real
         self.letter_bool = letter_bool
         self.free_bools: dict[str, Any] = {}
-        self.pres: list[Any] = []
         #: the divisors of the tick's ``/`` terms (z3's ``x / 0`` is a number; the audit's
         #: is NaN: the caller asks each to be non-zero)
         self.divisors: list[Any] = []
@@ -231,12 +221,10 @@ class TickTerms:
             return self._var(e.name)
         if isinstance(e, A.BoolLit):
             return z3.BoolVal(e.value)
-        if isinstance(e, (A.NumLit, A.Call)) and not (
-                isinstance(e, A.Call) and e.name == "ite"):
-            v = (float(e.value) if isinstance(e, A.NumLit) else
-                 value_at(e, list(self.rows) + [{}], self.t))
-            self.pres.append(v)
-            return _constant(z3, v)
+        if isinstance(e, A.NumLit):
+            return _constant(z3, float(e.value))
+        if isinstance(e, A.Call) and e.name != "ite":  # a pre: its operand at the tick before
+            return _constant(z3, value_at(e, self.rows, self.t))
         if isinstance(e, A.Call):  # ite
             c, a, b = (self.term(x) for x in e.args)
             return None if c is None or a is None or b is None else z3.If(c, a, b)

@@ -223,20 +223,8 @@ def _mentions(e: A.Expr, name: str) -> bool:
 
 def _replaced(e: A.Expr, name: str, value: bool | None) -> A.Expr:
     """``e`` with each ``preBool(b, name)`` replaced by the literal ``value`` (None: by its
-    own ``b``). Recursive to the definition's depth (bounded by the reader)."""
-    first = _first(e, name)
-    if first is not None:
-        return A.BoolLit(first if value is None else value)
-    if not _mentions(e, name):
-        return e
-    if isinstance(e, A.Unary):
-        return _folded(A.Unary(e.op, _replaced(e.operand, name, value)))
-    if isinstance(e, A.Binary):
-        return _folded(A.Binary(e.op, _replaced(e.left, name, value),
-                                _replaced(e.right, name, value)))
-    if isinstance(e, A.Call):
-        return _folded(A.Call(e.name, tuple(_replaced(a, name, value) for a in e.args)))
-    return e
+    own ``b``), literals folded (:func:`_replaced_by`)."""
+    return _replaced_by(e, name, lambda b: A.BoolLit(b if value is None else value))
 
 
 def _folded(e: A.Expr) -> A.Expr:

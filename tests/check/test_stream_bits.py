@@ -17,8 +17,8 @@ from click.testing import CliRunner
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from fretc.check.safety_game import Game
 from fretc.cli import main
+from test_monitor_sat import _monitor_series as stepped
 from fretc.compiler import ir
 from fretc.compiler.evaluate import series
 from fretc.compiler.expressions import Expander
@@ -42,24 +42,8 @@ _bits = st.recursive(st.one_of(st.tuples(st.just("self"), st.booleans()), _free)
 
 def _monitor_series(pt: ir.Node, trace: list[dict]) -> list[bool]:
     """The BDD monitor of ``pt`` (check/pt_monitor.py, through the safety game) stepped
-    over ``trace``: its value at each tick."""
-    g = Game([pt], [], ir.TRUE, ir.TRUE)
-    try:
-        b, m = g.b, g.m
-        state, out = g.init, []
-        for letter in trace:
-            here = state
-            for atom, var in m.atom_var.items():
-                here = b.bdd_and(here, b.bdd_ithvar(var) if letter[atom.name]
-                                 else b.bdd_nithvar(var))
-            out.append(b.bdd_and(here, g.ok) != b.bddfalse)
-            state = b.bddtrue
-            for cur, _nxt, _init, fn in m.bits:
-                on = b.bdd_and(here, fn) != b.bddfalse
-                state = b.bdd_and(state, b.bdd_ithvar(cur) if on else b.bdd_nithvar(cur))
-        return out
-    finally:
-        g.close()
+    over ``trace``: its value at each tick (tests/check/test_monitor_sat.py's stepper)."""
+    return stepped(pt, trace)[0]
 
 
 def _agree(variables, trace: list[dict]) -> None:
