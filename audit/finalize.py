@@ -30,10 +30,9 @@ from fretc.audit.model import AuditPlan, RequirementPlan
 from fretc.audit.columns import ClockPass
 from fretc.audit.passes import clock_key
 from fretc.audit.trials import trigger_trials
-from fretc.audit.unknown_ticks import judge_three
+from fretc.audit.unknown_ticks import gap_ticks, judge_three
 from fretc.audit.streams import with_streams
 from fretc.common.problems import NAN
-from fretc.compiler.ir import walk
 from fretc.monitors.vectorized import supports
 from fretc.monitors.robustness import TINY, margin_ticks
 
@@ -42,7 +41,7 @@ if TYPE_CHECKING:
     from fretc.audit.verdict import LogAudit, Verdict
 
 __all__ = ["finalize", "between_ticks", "prepare", "unknown_of", "NAN_FALSE_NOTE",
-           "vacuous_note", "judged", "decided", "shown_ticks", "StreamTicks", "counts_ticks"]
+           "vacuous_note", "judged", "decided", "shown_ticks", "StreamTicks"]
 
 #: The note of every verdict judged under a binding file's ``[tick] nan = "false"``.
 NAN_FALSE_NOTE = ("NaN policy of the binding file ([tick] nan = \"false\"): a comparison "
@@ -110,7 +109,8 @@ def _trials(r, res: ClockPass, v, nan_unknown: bool) -> None:
     semantics cannot count them (an uninterpreted function)."""
     n = len(res.times)
     unknown = unknown_of(r, res, nan_unknown)
-    parts = (Unknowns.of(r.requirement, res.unknown, res.columns, n, nan_unknown)
+    parts = (Unknowns.of(r.requirement, res.unknown, res.columns, n, nan_unknown,
+                         gap_ticks(res))
              if unknown.any() else None)
     try:
         v.trials = trigger_trials(r.requirement, res.columns, n, r.formalization.ticks,
@@ -240,24 +240,12 @@ def _nan_index(r: RequirementPlan, res: ClockPass) -> np.ndarray:
     return kept[2]
 
 
-def _three_valued_takes(r, res: ClockPass) -> str | None:
-    """None when the three-valued judge can take ``r`` on ``res``, else why not."""
+def _three_valued_takes(r) -> str | None:
+    """None when the three-valued judge can take ``r``, else why not."""
     f = r.formalization
     if not f.pt_causal or not supports(f.pt):
         return "its pt formula has a future-time function"
-    if res.tick_gaps and counts_ticks(r):
-        return ("it counts ticks on a clock that ticks on a topic's messages, and a gap of "
-                "that topic lost an unknown number of them")
     return None
-
-
-def counts_ticks(r: RequirementPlan) -> bool:
-    """Whether requirement ``r`` (formalized) counts ticks: a ``within``, ``for`` or
-    ``after`` timing, or a bounded operator in its pt formula (across a gap that lost an
-    unknown number of ticks it is judged up to the gap: :func:`prepare`)."""
-    assert r.requirement is not None and r.formalization is not None  # (formalized)
-    return (r.requirement.timing.kind in ("within", "for", "after")
-            or any(getattr(x, "hi", None) is not None for x in walk(r.formalization.pt)))
 
 
 def prepare(r: RequirementPlan, res: ClockPass, bindings: Bindings | None, v: Verdict,
@@ -277,7 +265,7 @@ def prepare(r: RequirementPlan, res: ClockPass, bindings: Bindings | None, v: Ve
     elif n:
         _nan_problem(r, res, la)
     unknown = unknown_of(r, res, nan_unknown)
-    why = _three_valued_takes(r, res) if unknown.any() else None
+    why = _three_valued_takes(r) if unknown.any() else None
     if why is None:
         return res, nan_unknown
     first = int(np.argmax(unknown))

@@ -30,10 +30,10 @@ trials; ``--coverage``; an automaton too large for tables) or where the trace le
 its ticks unknown, which the three-valued judge decides: an ``unknown`` cell in a column it
 reads, a ``gap`` or ``cut`` row. Those are known only once read, so the file is then read a
 second time, keeping those requirements' columns (:class:`fretc.audit.log` does both). A
-requirement whose comparisons read NaN (:data:`NAN_REASON`), that reads ``unknown`` cells
-(:data:`UNKNOWN_CELLS`) or, on a trace with a ``gap`` row (:data:`GAP_ROW`), that counts no
-ticks, is instead judged in three-valued semantics as the file is read again (:mod:`fretc.audit.streamed_three`, in memory that does not grow with the trace
-either), and only where those streams cannot take it are its columns kept. Every read of one audit (the second one, and the values
+requirement whose comparisons read NaN (:data:`NAN_REASON`) or that reads ``unknown`` cells
+(:data:`UNKNOWN_CELLS`), on a trace without a ``gap`` row (:data:`GAP_ROW`), is instead
+judged in three-valued semantics as the file is read again
+(:mod:`fretc.audit.streamed_three`, in memory that does not grow with the trace either), and only where those streams cannot take it are its columns kept. Every read of one audit (the second one, and the values
 read again around a violation) stops at the bytes the first one read
 (:attr:`fretc.logs.CsvSource.extent`, the file's size when first opened): a file still being
 written is judged over the same rows for every requirement. Memory: a chunk of rows, the streams' state

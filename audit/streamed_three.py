@@ -5,11 +5,11 @@ not grow with the trace.
 
 A requirement judged as a CSV trace is read (:mod:`fretc.audit.streamed`) gives up at the
 first chunk where one of its comparisons reads NaN, and one reading a column with an
-``unknown`` cell, or any on a trace with a ``gap`` row (every column unknown there), is given
-up at the end: those ticks are unknown (fretc's NaN rule, docs/guide/ticks.md), and its
-verdict is what every way of filling them agrees on (a requirement that counts ticks is
-judged up to a gap row instead, by the whole-trace judge: :func:`fretc.audit.finalize.
-prepare`). The
+``unknown`` cell is given up at the end: those ticks are unknown (fretc's NaN rule,
+docs/guide/ticks.md), and its verdict is what every way of filling them agrees on. On a
+trace with a ``gap`` row (one tick or more, how many not known) every requirement is judged
+by the whole-trace judge, which reads a gap row as every count of ticks
+(:class:`fretc.monitors.three_valued.ThreeValued`'s ``stretch``). The
 audit then reads the trace again, within the bytes the first read read
 (:attr:`fretc.logs.CsvSource.extent`), with these streams for each such requirement, each
 the counterpart of one part of the three-valued judge:
@@ -40,8 +40,8 @@ bytes (``tests/audit/test_streamed.py``). A requirement is judged whole after al
 streams cannot take it: an automaton or atom they do not evaluate a chunk at a time (an
 uninterpreted function, a comparison over ``pre``), a leaf of the pt formula that reads
 earlier ticks (the completions' program), more than
-:data:`fretc.monitors.definite_stream.MAX_RUNS` runs of unknown ticks, a ``gap`` row where it
-counts ticks, or a ``cut`` row (judged whole as before). Memory: per requirement the streams'
+:data:`fretc.monitors.definite_stream.MAX_RUNS` runs of unknown ticks, a ``gap`` row, or a
+``cut`` row (judged whole as before). Memory: per requirement the streams'
 state (as :mod:`fretc.audit.streamed`'s, the runs of unknown ticks, at most
 :data:`fretc.monitors.completions.MAX_STATES` states of the completions), and the rows of the
 trace's ``unknown`` cells. CPU: one read of the trace more (two where the completions could
@@ -68,7 +68,7 @@ from fretc.monitors.judge import compared_exprs
 from fretc.monitors.kleene_stream import KleeneStream, Ltl3SetStream
 from fretc.monitors.nan import nan_ticks_of
 from fretc.monitors.vectorized import VectorizeError
-from fretc.audit.finalize import StreamTicks, counts_ticks, decided
+from fretc.audit.finalize import StreamTicks, decided
 from fretc.audit.streamed import GAP_ROW, NAN_REASON, UNKNOWN_CELLS, CsvStreams
 from fretc.audit.unknown_ticks import (COMPLETED_NOTE, outgrew_words, pt_decides_note,
                                        unknown_reason)
@@ -319,7 +319,7 @@ def judged_three(plan: AuditPlan, streams: CsvStreams, source: CsvSource) -> Non
     gaps = source.gap_rows
     todo = [by_index[i] for i, why in streams.whole.items()
             if (why in (NAN_REASON, GAP_ROW) or why.startswith(UNKNOWN_CELLS))
-            and not (gaps and counts_ticks(by_index[i]))]
+            and not gaps]
     three = ThreeStreams.of(todo)
     if not three.streams:
         return

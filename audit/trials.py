@@ -147,6 +147,8 @@ def _met_known(timing: str, negate: bool, t: int, e: int, k: int, chk: Obligatio
     if target is not None:
         hi = min(t + k, e) if timing in ("within", "for") else e
         j = (chk.nR if target else chk.nNR)[t]
+        if j <= hi and timing in ("within", "for") and u.stretched(t, j):
+            return False  # (a gap between: the tick may lie past the duration)
         return j > hi or not u.R[j]
     hi = {"immediately": t, "next": min(t + 1, e), "within": min(t + k, e),
           "for": min(t + k, e), "after": min(t + k + 1, e)}.get(timing, e)

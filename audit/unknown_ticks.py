@@ -10,12 +10,13 @@ the end").
 * A cut at the end of the log (nothing read after it) is judged as before
   (:mod:`fretc.audit.damage`): only a definite LTL3 verdict decides, now over every letter an
   unknown tick may be.
+* A gap tick (a CSV trace's ``gap`` row; on a clock that ticks on a topic's messages, the
+  tick a gap of that topic lost) stands for one tick or more, how many not known: the
+  verdict is the one every count and every filling agrees on
+  (:class:`fretc.monitors.three_valued.ThreeValued`'s ``stretch``).
 * The three-valued judge needs the requirement's pt formula over columns. Requirements
-  without it (a future-time function, FRET leaves those unexpanded in pt) and, on a clock
-  that ticks on a topic's messages, requirements that count ticks (a duration, a bounded
-  operator) across a gap of that topic (how many ticks it lost is not known) are judged
-  as on a cut log instead: up to their first unknown tick (:func:`fretc.audit.finalize.
-  prepare`).
+  without it (a future-time function, FRET leaves those unexpanded in pt) are judged as on
+  a cut log instead: up to their first unknown tick (:func:`fretc.audit.finalize.prepare`).
 """
 
 from __future__ import annotations
@@ -40,7 +41,7 @@ if TYPE_CHECKING:
     from fretc.audit.verdict import Verdict
     from fretc.audit.model import RequirementPlan
 
-__all__ = ["judge_three", "pt_decides_note", "unknown_reason", "outgrew_words",
+__all__ = ["judge_three", "gap_ticks", "pt_decides_note", "unknown_reason", "outgrew_words",
            "COMPLETED_NOTE"]
 
 
@@ -57,7 +58,8 @@ def judge_three(r: RequirementPlan, res: ClockPass, v: Verdict, j: Judgement, na
     """
     assert r.requirement is not None and r.formalization is not None  # (judged: formalized)
     n = len(res.times)
-    ev3 = ThreeValued(res.columns, res.unknown, n, nan_unknown)
+    gaps = gap_ticks(res)
+    ev3 = ThreeValued(res.columns, res.unknown, n, nan_unknown, gaps)
     # Kleene's reading, and where it is open every completion's
     holds, (lo, hi), why = decide(r.formalization.pt, ev3)
     completed = holds is not None and not lo[-1] and bool(hi[-1])
@@ -72,7 +74,7 @@ def judge_three(r: RequirementPlan, res: ClockPass, v: Verdict, j: Judgement, na
     ev = j.evidence
     parts = None
     if ev is not None:
-        parts = Unknowns.of(r.requirement, res.unknown, res.columns, n, nan_unknown)
+        parts = Unknowns.of(r.requirement, res.unknown, res.columns, n, nan_unknown, gaps)
         # the failed triggers the known ticks make: unknown ticks set to meet the obligation
         ev = evaluate_requirement(r.requirement, res.columns, n, r.formalization.ticks,
                                   favour=parts)
@@ -93,6 +95,18 @@ def judge_three(r: RequirementPlan, res: ClockPass, v: Verdict, j: Judgement, na
     if holds is False and ev is not None and ev.violation is None:
         v.notes.append(_COMPLETED if completed else _pt_decides(hi))
     return holds, ev, status, st_tick
+
+
+def gap_ticks(res: ClockPass) -> np.ndarray | None:
+    """The gap ticks of ``res`` (bool array over its ticks: each one tick or more, how many
+    not known, docs/guide/ticks.md), or None without one."""
+    n = len(res.times)
+    at = [i for i in res.tick_gaps if i < n]
+    if not at:
+        return None
+    out = np.zeros(n, np.bool_)
+    out[at] = True
+    return out
 
 
 def outgrew_words(why: str) -> str:
@@ -153,6 +167,11 @@ def _why(res: ClockPass, unknown: np.ndarray, n: int, outgrew: str = "",
     what = ", ".join(causes)
     if res.lost_words:
         what += f": {res.lost_words}"
+    stretched = sum(1 for i in res.tick_gaps if i < n)
+    if stretched:
+        what += (f"; {stretched} of them " + ("a gap tick" if stretched == 1 else
+                                                 "gap ticks, each") +
+                 " standing for one tick or more")
     return unknown_reason(k, n, what, first, int(res.times[first]), outgrew)
 
 

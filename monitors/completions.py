@@ -174,6 +174,9 @@ def completed_verdict(pt: Node, ev: ThreeValued) -> bool | None:
     free_at = np.zeros(n, np.bool_)
     for k in prog.leaves:
         free_at |= lo[k] != hi[k]
+    gaps = ev.stretch
+    if gaps is not None:  # (a gap tick is followed whatever its leaves: its count is free)
+        free_at |= gaps
     free_ticks = np.flatnonzero(free_at)
     if not len(free_ticks):
         root_lo = ev.pair(pt)[0]
@@ -194,6 +197,7 @@ def completed_verdict(pt: Node, ev: ThreeValued) -> bool | None:
         if steps > MAX_STEPS:
             raise TooManyStates(f"more than {MAX_STEPS} node evaluations by tick {i}")
         nxt: dict[tuple[Any, ...], Any] = {}
+        gap = gaps is not None and bool(gaps[i])
         for state, chain in states.items():
             for bits in itertools.product((False, True), repeat=len(free)):
                 leaves = dict(known)
@@ -202,7 +206,11 @@ def completed_verdict(pt: Node, ev: ThreeValued) -> bool | None:
                 if i == n - 1:
                     finals.add(root)
                 if after not in nxt:
-                    nxt[after] = (chain, i, dict(zip(free, bits))) if free else chain
+                    letter = dict(zip(free, bits))
+                    nxt[after] = ((chain, i, (letter,)) if gap else
+                                  (chain, i, letter) if free else chain)
+        if gap:
+            steps = _stretch(prog, nxt, known, free, i, i == n - 1, finals, steps)
         states = nxt
     if last < n - 1:
         for chain in states.values():
@@ -212,32 +220,86 @@ def completed_verdict(pt: Node, ev: ThreeValued) -> bool | None:
     return finals.pop() if len(finals) == 1 else None
 
 
+def _stretch(prog: _Program, states: dict[tuple[Any, ...], Any], known: dict[int, bool],
+             free: list[int], i: int, last: bool, finals: set[bool], steps: int) -> int:
+    """Add to ``states`` (those one tick of the gap tick ``i`` leads to, each with its
+    chain) every state further ticks of the gap lead to, each tick any letter of the
+    ``free`` leaves (a gap stands for one tick or more); at the ``last`` tick each of them
+    may end the trace (its root into ``finals``). Returns the work counted so far.
+
+    Raises:
+        TooManyStates: past :data:`MAX_STATES` or :data:`MAX_STEPS`."""
+    frontier = dict(states)
+    later = max(i, 1)  # (the gap's later ticks are not the trace's first)
+    letters = 1 << len(free)
+    while frontier:
+        steps += len(frontier) * letters * prog.cost
+        if len(states) * letters > MAX_STATES:
+            raise TooManyStates(f"{len(states)} states times {letters} letters in the gap "
+                                f"at tick {i} (bound {MAX_STATES})")
+        if steps > MAX_STEPS:
+            raise TooManyStates(f"more than {MAX_STEPS} node evaluations by tick {i}")
+        nxt: dict[tuple[Any, ...], Any] = {}
+        for state, (chain, _i, seq) in frontier.items():
+            for bits in itertools.product((False, True), repeat=len(free)):
+                leaves = dict(known)
+                leaves.update(zip(free, bits))
+                root, after = prog.step(state, leaves, later)
+                if last:
+                    finals.add(root)
+                if after not in states and after not in nxt:
+                    nxt[after] = (chain, i, seq + (dict(zip(free, bits)),))
+        states.update(nxt)
+        frontier = nxt
+    return steps
+
+
 def _evaluate_completion(pt: Node, ev: ThreeValued, prog: _Program, chain: Any) -> bool:
     """The pt formula at the last tick of ``ev`` with the unknown atoms filled as ``chain``
-    says (at its ticks) and every other tick's atoms as read."""
+    says (at its ticks; at a gap tick, a sequence of one letter or more: the ticks it
+    stands for) and every other tick's atoms as read."""
     filled = {k: ev.pair(prog.nodes[k])[0].copy() for k in prog.leaves}
+    spans: dict[int, tuple[dict[int, bool], ...]] = {}
     while chain is not None:
         chain, i, values = chain
+        if isinstance(values, tuple):
+            spans[i] = values
+            continue
         for k, v in values.items():
             filled[k][i] = v
-    done = ThreeValued(ev.columns, {}, ev.n, ev.nan_unknown)
+    n = ev.n
+    if spans:  # every gap tick as the ticks its letters fill
+        counts = np.ones(n, np.int64)
+        for i, seq in spans.items():
+            counts[i] = len(seq)
+        at = np.repeat(np.arange(n), counts)
+        starts = np.concatenate(([0], np.cumsum(counts)[:-1]))
+        filled = {k: arr[at] for k, arr in filled.items()}
+        for i, seq in spans.items():
+            for j, letter in enumerate(seq):
+                for k, v in letter.items():
+                    filled[k][starts[i] + j] = v
+        n = len(at)
+    done = ThreeValued(ev.columns, {}, n, ev.nan_unknown)
     for k, arr in filled.items():
         done.fix(prog.nodes[k], arr)
     return bool(done.pair(pt)[0][-1])
 
 
 def pt_verdict(pt: Node, columns: Mapping[str, np.ndarray], unknown: Mapping[str, np.ndarray],
-               n: int, nan_unknown: bool = True) -> tuple[bool | None, Pair]:
+               n: int, nan_unknown: bool = True, stretch: np.ndarray | None = None
+               ) -> tuple[bool | None, Pair]:
     """FRET's finite-trace verdict over ``n`` ticks with unknown ticks: True (every way of
     filling them satisfies), False (every one violates) or None (it depends on them, or
     the search of :func:`completed_verdict`, which decides where Kleene's reading leaves it
     open, outgrew its bound); and the pt formula's Kleene ``(lo, hi)`` at every tick
-    (:func:`decide` over the columns).
+    (:func:`decide` over the columns). ``stretch``: the gap ticks, each one tick or more
+    (:class:`~fretc.monitors.three_valued.ThreeValued`).
 
     Raises:
         VectorizeError: the pt formula cannot be evaluated over columns.
     """
-    holds, pair, _why = decide(pt, ThreeValued(columns, unknown, n, nan_unknown))
+    holds, pair, _why = decide(pt, ThreeValued(columns, unknown, n, nan_unknown, stretch))
     return holds, pair
 
 

@@ -13,6 +13,11 @@ Schallhart, TOSEM 2011). Numbers carry an unknown mask through arithmetic; a com
 unknown where an operand is, and, under fretc's NaN rule (docs/guide/ticks.md, "NaN"), where
 an operand is NaN.
 
+A *gap tick* (``stretch``: a ``gap`` row of a CSV trace, a tick a gap of a tick topic
+lost, docs/guide/ticks.md) stands for one tick or more, how many not known: its pair is what
+every one of those ticks, for every count, may be, and a tick after it reads the ticks before
+it at every distance from the one a single tick gives on (:meth:`ThreeValued.pair`).
+
 FRET's finite-trace verdict is the pt formula at the last tick
 (:func:`fretc.monitors.completions.pt_verdict`); the
 LTL3 verdict runs the monitor automata over every letter an unknown tick may be
@@ -34,7 +39,7 @@ from fretc.monitors.vectorized import VectorizeError
 if TYPE_CHECKING:
     from fretc.compiler.codegen import MonitorSource
 
-__all__ = ["Pair", "ThreeValued", "ltl3_verdict"]
+__all__ = ["Pair", "ThreeValued", "ltl3_verdict", "stretched_window"]
 
 Pair = tuple[np.ndarray, np.ndarray]
 _FUTURE = ("X", "F", "G", "U", "V", "LAST", "future")
@@ -49,6 +54,39 @@ def _since(x: np.ndarray, y: np.ndarray, idx: np.ndarray) -> np.ndarray:
     last_y = np.maximum.accumulate(np.where(y, idx, -1))
     last_not_x = np.maximum.accumulate(np.where(x, -1, idx))
     return (last_y >= 0) & (last_not_x <= last_y)
+
+
+def _hits(x: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> np.ndarray:
+    """Whether ``x`` is true at some tick of ``[lower[i], upper[i]]``, at every ``i`` (an
+    empty range where ``upper < lower``; bounds clipped to the ticks)."""
+    n = len(x)
+    cs = np.zeros(n + 1, np.int64)
+    np.cumsum(x, out=cs[1:])
+    lower = np.clip(lower, 0, n)
+    upper = np.clip(upper + 1, 0, n)
+    return (upper > lower) & (cs[upper] - cs[np.minimum(lower, upper)] > 0)
+
+
+def stretched_window(pair: tuple[np.ndarray, np.ndarray], lo: int, hi: int, once: bool,
+                     stretch: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``O[lo,hi]`` (``once``) or ``H[lo,hi]`` of the Kleene ``pair`` over ticks some of
+    which are gap ticks (``stretch``, bool array: each one tick or more). Tick ``s`` lies at
+    the distance ``i - s`` from tick ``i`` when no gap tick lies in ``[s, i]``, else at any
+    distance from ``i - s`` on: ``O`` may be true where its operand may be at a tick some
+    count puts in the window, and is true where it is at a tick every count does (the tick
+    itself, at distance 0, for a gap tick and ``lo == 0``); ``H`` is the dual. Sound for every
+    count of every gap (Kleene 1952)."""
+    x_lo, x_hi = pair
+    n = len(x_lo)
+    idx = np.arange(n, dtype=np.int64)
+    last_gap = np.maximum.accumulate(np.where(stretch, idx, -1)) if n else idx
+    may_lower = idx - hi
+    may_upper = np.maximum(idx - lo, last_gap)
+    sure_lower = np.maximum(idx - hi, last_gap + 1 - (stretch & (lo == 0)))
+    sure_upper = idx - lo
+    if once:
+        return _hits(x_lo, sure_lower, sure_upper), _hits(x_hi, may_lower, may_upper)
+    return ~_hits(~x_lo, may_lower, may_upper), ~_hits(~x_hi, sure_lower, sure_upper)
 
 
 def _window(x: np.ndarray, lo: int, hi: int, once: bool, idx: np.ndarray) -> np.ndarray:
@@ -68,16 +106,21 @@ class ThreeValued:
     """A pt formula's nodes over ``n`` ticks of ``columns`` with the variables' unknown
     ticks ``unknown`` (variable -> bool array of ``n``); ``nan_unknown``: a NaN operand of a
     comparison (or a NaN number read as a condition) is unknown (fretc's default NaN rule;
-    False under ``[tick] nan = "false"``, where NaN compares as IEEE 754 says).
+    False under ``[tick] nan = "false"``, where NaN compares as IEEE 754 says); ``stretch``:
+    the gap ticks (bool array of ``n``; module docstring), their variables unknown in
+    ``unknown`` too.
 
     Raises:
         VectorizeError: (from :meth:`pair`) a future-time operator, or a missing column.
     """
 
     def __init__(self, columns: Mapping[str, np.ndarray], unknown: Mapping[str, np.ndarray],
-                 n: int, nan_unknown: bool = True):
+                 n: int, nan_unknown: bool = True, stretch: np.ndarray | None = None):
         self.columns, self.unknown, self.n = columns, unknown, n
         self.nan_unknown = nan_unknown
+        #: the gap ticks (None: none)
+        self.stretch = (np.asarray(stretch[:n], np.bool_)
+                        if stretch is not None and np.any(stretch[:n]) else None)
         self.idx = np.arange(n, dtype=np.int64)
         self.none = np.zeros(n, np.bool_)
         any_unknown = self.none.copy()
@@ -140,6 +183,8 @@ class ThreeValued:
             return self.none, self.none
         if op == "FTP":
             first = self.idx == 0
+            if self.stretch is not None and n and self.stretch[0]:
+                return first & False, first  # (a gap at the first tick: its later ticks)
             return first, first
         if op == "ap":
             return self._bool_leaf(name_of(node))
@@ -168,7 +213,11 @@ class ThreeValued:
         if op in ("Y", "Z"):
             lo, hi = self.pair(a[0])
             z = op == "Z"
-            return shifted(lo, z, np.bool_), shifted(hi, z, np.bool_)
+            y_lo, y_hi = shifted(lo, z, np.bool_), shifted(hi, z, np.bool_)
+            g = self.stretch
+            if g is not None:  # a gap's later ticks read its own
+                y_lo, y_hi = y_lo & ~(g & ~lo), y_hi | (g & hi)
+            return y_lo, y_hi
         if op in ("O", "H"):
             return self._once(node)
         if op in ("S", "T"):
@@ -214,6 +263,8 @@ class ThreeValued:
             acc = np.logical_or.accumulate if once else np.logical_and.accumulate
             return (acc(lo), acc(hi)) if self.n else (lo, hi)
         b_lo, b_hi = node.lo or 0, node.hi
+        if self.stretch is not None:
+            return stretched_window((lo, hi), b_lo, b_hi, once, self.stretch)
         return (_window(lo, b_lo, b_hi, once, self.idx),
                 _window(hi, b_lo, b_hi, once, self.idx))
 
@@ -241,8 +292,13 @@ class ThreeValued:
             return -x, ux
         if op == "pre":
             (i0, u0), (x, ux) = self.number(a[0]), self.number(a[1])
-            return (shifted(x, i0[0] if n else None, np.float64),
-                    shifted(ux, bool(u0[0]) if n else False, np.bool_))
+            px = shifted(x, i0[0] if n else None, np.float64)
+            pu = shifted(ux, bool(u0[0]) if n else False, np.bool_)
+            g = self.stretch
+            if g is not None:  # a gap's later ticks read its own values
+                with np.errstate(invalid="ignore"):
+                    pu = pu | (g & (ux | ~((px == x) | (np.isnan(px) & np.isnan(x)))))
+            return px, pu
         if op == "ite":
             c = self.pair(a[0])
             (t, ut), (e, ue) = self.number(a[1]), self.number(a[2])
@@ -298,18 +354,31 @@ def _first_rejection(aut, ev: ThreeValued) -> int | None:
         free_bits |= f.astype(np.int64) << j
     states = {aut.initial}
     table = aut.table
+    gaps = ev.stretch
     for i in range(ev.n):
         letters = _letters(int(known[i]), int(free_bits[i]))
-        nxt = set()
-        for s in states:
-            row = table[s]
-            for letter in letters:
-                nxt.add(row[letter])
-        live = {s for s in nxt if s >= 0}
+        live = _moved(table, states, letters)
         if not live:
             return i
+        if gaps is not None and gaps[i]:  # one tick or more: every count's states
+            live = _reach(table, live, letters)
         states = live
     return None
+
+
+def _moved(table: list[list[int]], states: set[int], letters: list[int]) -> set[int]:
+    """The live states (>= 0) ``table`` moves ``states`` to on any of ``letters``."""
+    return {t for s in states for x in letters if (t := table[s][x]) >= 0}
+
+
+def _reach(table: list[list[int]], states: set[int], letters: list[int]) -> set[int]:
+    """``states`` with every live state further ticks of ``letters`` lead to (a gap tick
+    standing for one tick or more: the states after it for every count)."""
+    seen, frontier = set(states), set(states)
+    while frontier:
+        frontier = _moved(table, frontier, letters) - seen
+        seen |= frontier
+    return seen
 
 
 def _letters(fixed: int, free: int) -> list[int]:

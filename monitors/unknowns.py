@@ -70,7 +70,8 @@ def expression_unknown(e: A.Expr | None, unknown: Mapping[str, np.ndarray],
 @dataclass
 class Unknowns:
     """Where each part of a requirement is unknown over ``n`` ticks (bool arrays): the scope
-    mode ``M``, the condition ``C``, the response ``R`` and the stop condition ``S``."""
+    mode ``M``, the condition ``C``, the response ``R`` and the stop condition ``S``; and
+    the gap ticks ``stretch`` (each one tick or more, how many not known; None: none)."""
 
     n: int
     M: np.ndarray
@@ -78,16 +79,21 @@ class Unknowns:
     R: np.ndarray
     S: np.ndarray
     ticks: np.ndarray = field(default=None)  # type: ignore[arg-type]  # any part unknown; set by of()
+    stretch: np.ndarray | None = None
 
     @classmethod
     def of(cls, req: A.Requirement, unknown: Mapping[str, np.ndarray],
-           columns: Mapping[str, np.ndarray], n: int, nan_unknown: bool) -> Unknowns:
-        """The unknown ticks of ``req``'s parts (:func:`expression_unknown`)."""
+           columns: Mapping[str, np.ndarray], n: int, nan_unknown: bool,
+           stretch: np.ndarray | None = None) -> Unknowns:
+        """The unknown ticks of ``req``'s parts (:func:`expression_unknown`); ``stretch``:
+        the gap ticks (bool array of ``n``, or None)."""
         def part(e):
             return expression_unknown(e, unknown, columns, n, nan_unknown)
 
         u = cls(n, part(req.scope.mode), part(req.condition.expr), part(req.response),
                 part(req.timing.stop))
+        if stretch is not None and np.any(stretch[:n]):
+            u.stretch = np.asarray(stretch[:n], np.bool_)
         for p in req.condition.parts:
             u.C |= part(p.expr)
         u.ticks = u.M | u.C | u.R | u.S
@@ -131,6 +137,10 @@ class Unknowns:
             return False
         return cond == "holding" or t == s or not self.C[t - 1]
 
+    def stretched(self, lo: int, hi: int) -> bool:
+        """A gap tick lies in ``[lo, hi]``: the distance between those ticks is not known."""
+        return self.stretch is not None and bool(self.stretch[max(lo, 0):hi + 1].any())
+
     def obligation_known(self, lo: int, hi: int) -> bool:
         """The response and stop condition are known on ``[lo, hi]``."""
         lo, hi = max(lo, 0), min(hi, self.n - 1)
@@ -142,10 +152,13 @@ class Unknowns:
         ``window_start`` and which failed at ``violation_tick`` (the fields of a
         :class:`fretc.monitors.interval.Violation`), fails in every completion: for an
         invariant over a window (``always``, ``never``, ``for``, not in an ``only*`` scope)
-        the response known at the tick it failed; for the others the response (and stop
-        condition) known from the trigger to that tick."""
+        the response known at the tick it failed (for ``for``, with no gap tick from the
+        trigger to it: a gap of more ticks puts it past the duration); for the others the
+        response (and stop condition) known from the trigger to that tick."""
         vt = min(violation_tick, self.n - 1)
         if not negate and timing in ("always", "never", "for"):
+            if timing == "for" and self.stretched(min(trigger_tick, window_start), vt):
+                return False
             return not self.R[vt]
         return self.obligation_known(min(trigger_tick, window_start), vt)
 

@@ -35,7 +35,6 @@ import fretc.audit.streamed_three as streamed_three
 import fretc.logs.csv.read as csv_read
 import fretc.monitors.robustness as robustness
 from fretc.audit import AuditConfig, audit_log, load_plan
-from fretc.audit.finalize import counts_ticks
 from fretc.audit.sampled.csv import write_sampled_csv
 from fretc.audit.verdict import audit_json
 from fretc.logs.csv.source import CLOCK_COLUMN, CsvSource
@@ -193,11 +192,11 @@ def check_trace(tmp_path_factory, n: int, timed: bool, marks: str, rows: int, ch
     streamed_ids = _ids(plan, decided["results"])
     assert not streamed_ids & WHOLE
     if marks in ("", "nan", "unknown", "both", "gap") and chunk >= 3:
-        # a clean trace, or one whose NaN, unknown cells and gap rows the three-valued
-        # streams take: every requirement but WHOLE streamed (a robustness chunk shorter
-        # than a bounded window, R14's 3 ticks, is refused), and but those counting ticks
-        # across a gap row (judged up to it)
-        gapped = {r.id for r in plan.requirements if counts_ticks(r)} \
+        # a clean trace, or one whose NaN and unknown cells the three-valued streams take:
+        # every requirement but WHOLE streamed (a robustness chunk shorter than a bounded
+        # window, R14's 3 ticks, is refused); on one with a gap row none (the whole-trace
+        # judge reads a gap row as every count of ticks)
+        gapped = {r.id for r in plan.requirements} \
             if marks == "gap" and "gap," in path.read_text() else set()
         assert streamed_ids == {r.id for r in plan.requirements} - WHOLE - gapped, \
             decided["whole"]
@@ -206,10 +205,10 @@ def check_trace(tmp_path_factory, n: int, timed: bool, marks: str, rows: int, ch
 @pytest.mark.tor("TOR-LOG-003")
 def test_what_sends_a_requirement_back_to_the_whole_trace_judge(plan, tmp_path):
     """A NaN read by a comparison sends the requirements comparing ``x`` (only them) to the
-    three-valued streams (audit/streamed_three.py), which decide them here, an ``unknown``
-    cell those reading its column, and a ``gap`` row every one but those that count ticks
-    (judged up to the gap, by the whole-trace judge); a ``cut`` row sends every one back to
-    the whole-trace judge. The JSON is the whole-trace judge's in each case."""
+    three-valued streams (audit/streamed_three.py), which decide them here, and an
+    ``unknown`` cell those reading its column; a ``gap`` row (one tick or more) or a ``cut``
+    row sends every one back to the whole-trace judge. The JSON is the whole-trace judge's
+    in each case."""
     rows = ["time,x,p,q,m"] + [f"{i / 10:.1f},1.5,{i % 3 == 0:d},{i % 4 == 0:d},{i % 7 < 3:d}"
                                for i in range(30)]
 
@@ -243,10 +242,8 @@ def test_what_sends_a_requirement_back_to_the_whole_trace_judge(plan, tmp_path):
     assert not back and ok == set(_ids(plan, range(99))) - WHOLE
     assert three["unknown"] == reading_q
     ok, back = run("gap", lambda lines: lines.insert(12, "1.05,gap,gap,gap,gap"))
-    counting = {r.id for r in plan.requirements if counts_ticks(r)} - WHOLE
-    assert counting == {"R2", "R6", "R9", "R14", "R17"}
-    assert back == counting and ok == set(_ids(plan, range(99))) - WHOLE - counting
-    assert three["gap"] == ok
+    assert not ok and back == set(_ids(plan, range(99))) - WHOLE
+    assert not three.get("gap")
     ok, back = run("cut", lambda lines: lines.append("3.0,cut,cut,cut,cut"))
     assert not ok and back == set(_ids(plan, range(99))) - WHOLE
     assert not three.get("cut")
