@@ -24,7 +24,7 @@ from typing import Any
 
 from fretc.check.findings import CheckResult
 
-__all__ = ["component_row", "table_text", "project_json"]
+__all__ = ["component_row", "table_text", "project_json", "project_exit"]
 
 
 def component_row(name: str, ids: list[str], result: CheckResult) -> dict[str, Any]:
@@ -53,8 +53,14 @@ def component_row(name: str, ids: list[str], result: CheckResult) -> dict[str, A
         row.update(realizability="unknown", reason="; ".join(f.message for f in unknown))
     elif undeclared:
         names = sorted({n for f in undeclared for n in f.details.get("undeclared", {})})
-        row.update(realizability="not checked",
-                   reason=", ".join(names) + " declared neither Input nor Output")
+        why = {n: w for f in undeclared for n, w in f.details.get("free_definitions",
+                                                                    {}).items()}
+        plain = [n for n in names if n not in why]
+        causes = [f"{n}: FRET defines it, but {w}: a free variable to fretc, which is "
+                  "declared neither Input nor Output" for n, w in sorted(why.items())]
+        if plain:
+            causes.append(", ".join(plain) + " declared neither Input nor Output")
+        row.update(realizability="not checked", reason="; ".join(causes))
     elif rz.get("groups") and all(g.get("realizable") is True for g in rz["groups"]):
         row["realizability"] = "realizable"
     else:
@@ -92,11 +98,26 @@ def project_json(parts: list[tuple[str, list[str], CheckResult]]) -> dict[str, A
     ``{"tool", "exit_code", "fret_components": [{"component", "requirements",
     "realizability", "conflicts", "reason", "exit_code", "check"}]}``, ``check`` the
     component's own check document (:meth:`CheckResult.to_json`); ``exit_code`` the
-    largest."""
+    largest of :func:`project_exit`'s."""
     comps = []
     for name, ids, result in parts:
         row = component_row(name, ids, result)
         row["check"] = result.to_json()
         comps.append(row)
-    return {"tool": "fretc check", "exit_code": max((r["exit_code"] for r in comps), default=0),
+    return {"tool": "fretc check",
+            "exit_code": max((project_exit(r, result) for r, (_n, _i, result)
+                              in zip(comps, parts)), default=0),
             "fret_components": comps}
+
+
+def project_exit(row: dict[str, Any], result: CheckResult) -> int:
+    """What component ``row`` (:func:`component_row` of ``result``) adds to a whole
+    project's exit code: its own, but a component not checked counts as an unknown answer
+    (1: nothing is called fine that was not checked), and its undeclared variables are no
+    input error of the project (2 only for another input error: a requirement that does not
+    formalize)."""
+    if row["realizability"] != "not checked":
+        return row["exit_code"]
+    other = result.input_errors or any(f.severity == "input" and f.kind != "undeclared"
+                                       for f in result.findings)
+    return 2 if other else 1

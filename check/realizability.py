@@ -176,10 +176,18 @@ def _undeclared_finding(comp: Sequence[Any], readers: dict[str, list[str]],
     severity ``input`` makes the exit code 2 (an input error, as FRET refuses to check
     realizability then); the checks that need no roles are reported as ever."""
     fret: dict[str, Any] = {}
+    why: dict[str, str] = {}  # (a definition fretc reads as a free variable: why)
     for x in comp:
-        for v in getattr(x.compiled.entry, "variables", ()):
+        variables = tuple(getattr(x.compiled.entry, "variables", ()) or ())
+        for v in variables:
             if v.name in readers and v.kind:
                 fret.setdefault(v.name, v)
+                if v.kind in ("Internal", "Mode") and v.name not in why:
+                    from fretc.fretish.fret_definitions import definitions
+
+                    reason = definitions(variables).free.get(v.name)
+                    if reason:
+                        why[v.name] = reason
     via = _through_streams(comp, readers, streams or {})
     names = [f"{v} (read by {', '.join(ids)}" + (
         f"{' through' if v in via[0] else ', and by'} the stream variable"
@@ -189,6 +197,7 @@ def _undeclared_finding(comp: Sequence[Any], readers: dict[str, list[str]],
     kinds = [f"{v} {'an' if f.kind[0] in 'AEIOU' else 'a'} {f.kind}"
              + (f" of {f.component}" if f.component else "")
              + ("" if f.kind in ("Input", "Output") else ", a free variable to fretc")
+             + (f" ({why[v]})" if v in why else "")
              for v, f in fret.items()]
     one = len(readers) == 1
     involved = [i for i in _ids(comp) if any(i in ids for ids in readers.values())]
@@ -200,6 +209,8 @@ def _undeclared_finding(comp: Sequence[Any], readers: dict[str, list[str]],
            "(as FRET, realizability is checked only when every variable is the "
            "environment's or the controller's)")
     details: dict[str, Any] = {"undeclared": readers, "group": _ids(comp)}
+    if why:
+        details["free_definitions"] = why
     if via[1]:
         details["through_streams"] = via[1]
     return Finding("undeclared", "input", involved, msg, details=details)

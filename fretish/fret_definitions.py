@@ -34,9 +34,10 @@ from fretc.fretish import ast as A
 from fretc.fretish.fret_since import (reads_itself_as_bit, reads_itself_monotonically,
                                       since_expansion, stream_expansion)
 from fretc.fretish.limits import MAX_EXPR_DEPTH, depth
-from fretc.fretish.lustre import LustreError, LustreTooDeep, parse_definition
+from fretc.fretish.lustre import LustreError, LustreTooDeep, parse_definition, pre_groups
 
-__all__ = ["Definitions", "definitions", "substitute", "constant_of", "MAX_EXPANSION_NODES"]
+__all__ = ["Definitions", "definitions", "substitute", "constant_of", "MAX_EXPANSION_NODES",
+           "GROUPED"]
 
 #: A Lustre literal (Lustre's ``INT``/``REAL`` constants, ``true``/``false``)
 _LITERAL = re.compile(r"[-+]?([0-9]+(\.[0-9]*)?|\.[0-9]+)([eE][-+]?[0-9]+)?\Z")
@@ -103,8 +104,11 @@ def definitions(variables: tuple[Any, ...], since: bool = True,
     stream (the other readers of these expansions, testgen's and ``fretc compile``'s
     emitters, have no form for it)."""
     kinds = {v.name: v for v in variables}
+    grouped: dict[str, bool] = {}  # (a pre group's variable: whether it is boolean)
 
     def is_boolean(name: str) -> bool:
+        if name in grouped:
+            return grouped[name]
         v = kinds.get(name)
         return v is not None and v.data_type == "boolean"
 
@@ -128,12 +132,15 @@ def definitions(variables: tuple[Any, ...], since: bool = True,
             continue
         try:
             raw[v.name] = parse_definition(texts[v.name], is_boolean)
+        except LustreTooDeep as exc:
+            if not _grouped(v.name, texts, raw, free, grouped, kinds, is_boolean):
+                free[v.name] = f"its definition is {exc}"
         except LustreError as exc:
-            free[v.name] = (f"its definition is {exc}" if isinstance(exc, LustreTooDeep) else
-                            f"its definition is outside FRET's Lustre subset that fretc reads "
+            free[v.name] = (f"its definition is outside FRET's Lustre subset that fretc reads "
                             f"({exc})")
     values: dict[str, A.Expr] = {}
-    monotone = frozenset(n for n in raw if since and (is_boolean(n) or kinds[n].kind == "Mode")
+    monotone = frozenset(n for n in raw if since and n in kinds
+                         and (is_boolean(n) or kinds[n].kind == "Mode")
                          and reads_itself_monotonically(raw[n], n))
     machines = frozenset(n for n in raw if since and bits and n not in monotone
                          and is_boolean(n) and reads_itself_as_bit(raw[n], n, is_boolean))
@@ -144,6 +151,32 @@ def definitions(variables: tuple[Any, ...], since: bool = True,
     ticked = definitions(variables, False).streams
     return Definitions(values, free, texts, {n: e for n, e in ticked.items() if n not in values},
                        frozenset(monotone & set(values)), frozenset(machines & set(values)))
+
+
+#: the clause of a definition read as its ``pre`` groups' equations (:func:`_grouped`)
+GROUPED = ("its definition nests pre past the depth of an expression (a table of values "
+           "over time): each pre group an equation of its own")
+
+
+def _grouped(name: str, texts: dict[str, str], raw: dict[str, A.Expr], free: dict[str, str],
+             grouped: dict[str, bool], kinds: dict[str, Any], is_boolean: Any) -> bool:
+    """Read ``name``'s definition, too deep for one expression, as the equations of its
+    ``pre`` groups (:func:`fretc.fretish.lustre.pre_groups`): each into ``raw``, ``texts``
+    and ``grouped`` (its type), free with :data:`GROUPED` (a stream computed tick by tick,
+    never expanded). False when it cannot be (an equation still too deep)."""
+    try:
+        eqs = pre_groups(texts[name], name, lambda n: n in kinds or n in raw, is_boolean)
+    except LustreError:
+        return False
+    if eqs is None:
+        return False
+    for var, e, boolean, source in eqs:
+        raw[var] = e
+        free[var] = GROUPED
+        if var != name:
+            grouped[var] = boolean
+            texts[var] = source
+    return True
 
 
 def _mode(text: str, is_boolean: Any) -> A.Expr:
@@ -286,7 +319,8 @@ def _streams(raw: dict[str, A.Expr], values: dict[str, A.Expr],
     expanded definitions, without a call other than ``if``/``pre`` (a glossary function
     has no value fretc knows), and with no cycle outside ``pre`` among them (Lustre's
     causality rule); in evaluation order (dependencies first, then by name)."""
-    state = {n for n, why in free.items() if n in raw and why.startswith(_STATE)}
+    state = {n for n, why in free.items() if n in raw and (why.startswith(_STATE)
+                                                           or why == GROUPED)}
     grown = True
     while grown:
         grown = False

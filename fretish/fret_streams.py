@@ -32,7 +32,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from fretc.fretish import ast as A
-from fretc.fretish.fret_definitions import definitions, substitute
+from fretc.fretish.fret_definitions import GROUPED, definitions, substitute
 
 __all__ = ["StreamSystem", "stream_system", "STREAM_NOTE", "stream_why", "FIRST_TICK",
            "is_boolean"]
@@ -52,6 +52,8 @@ def stream_why(free_reason: str) -> str:
     through ``pre`` (alone or round a cycle of definitions), or it reads such a variable."""
     if free_reason.startswith("its definition reads itself"):
         return "it reads itself through pre"
+    if free_reason == GROUPED:
+        return "its pre groups nest past the depth of an expression: a table of values over time"
     return "it reads a variable that reads itself through pre"
 
 

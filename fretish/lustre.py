@@ -38,7 +38,7 @@ from collections.abc import Callable
 from fretc.fretish import ast as A
 from fretc.fretish.limits import MAX_EXPR_DEPTH, depth
 
-__all__ = ["LustreError", "LustreTooDeep", "parse_definition"]
+__all__ = ["LustreError", "LustreTooDeep", "parse_definition", "pre_groups"]
 
 _TOKEN = re.compile(r"\s*(?:(?P<num>(?:[0-9]+(?:\.[0-9]*)?|\.[0-9]+)(?:[eE][-+]?[0-9]+)?)"
                     r"|(?P<name>[A-Za-z_][A-Za-z0-9_]*)"
@@ -76,6 +76,80 @@ def parse_definition(text: str, is_boolean: Callable[[str], bool]) -> A.Expr:
         raise LustreTooDeep(f"nested more than {MAX_EXPR_DEPTH} levels deep (the limit of a "
                           "FRETish expression)")
     return e
+
+
+def pre_groups(text: str, name: str, taken: Callable[[str], bool],
+               is_boolean: Callable[[str], bool]) -> list[tuple[str, A.Expr, bool, str]] | None:
+    """The Lustre definition ``text`` of the variable ``name`` as equations, one per
+    parenthesized ``pre ( e )`` group: the group is a variable of its own, ``name__preK``
+    (the first K that ``taken`` refuses not), defined as ``e``, and read as ``pre
+    name__preK`` (Lustre's meaning unchanged: a node's local variable). For definitions
+    nested past :data:`fretc.fretish.limits.MAX_EXPR_DEPTH` through ``pre``: FRET's tables of
+    values over time, ``c0 -> pre(c1 -> pre(c2 -> ...))`` (LMCPS's NN, 199 deep). Read
+    without recursion; each equation then as :func:`parse_definition` reads it, the
+    innermost first (a group's type is that of its expression).
+
+    Returns:
+        ``[(variable, expression, is_boolean, text)]`` the groups innermost first and
+        ``name`` last; None when an equation is still too deep or has no ``pre`` group.
+
+    Raises:
+        LustreError: a token or construct outside the subset, unbalanced parentheses."""
+    toks = [t for t, _at in _tokens(text)]
+    opened = sum(1 for a, b in zip(toks, toks[1:]) if a == "pre" and b == "(")
+    if not opened:
+        return None
+    base = f"{name}__pre"
+    while any(taken(f"{base}{j}") for j in range(1, opened + 1)):
+        base += "_"
+    frames: list[list[str]] = [[]]
+    plain: list[int] = [0]  # (open plain parentheses in each frame)
+    ids: list[int] = [0]  # (each group numbered as it opens: the outermost 1)
+    groups: list[tuple[str, list[str]]] = []
+    i = count = 0
+    while i < len(toks):
+        tok = toks[i]
+        if tok == "pre" and i + 1 < len(toks) and toks[i + 1] == "(":
+            count += 1
+            frames.append([])
+            plain.append(0)
+            ids.append(count)
+            i += 2
+            continue
+        if tok == ")" and plain[-1] == 0:
+            if len(frames) == 1:
+                raise LustreError(f"unbalanced ')' in {name}'s definition")
+            aux = f"{base}{ids.pop()}"
+            groups.append((aux, frames.pop()))
+            plain.pop()
+            frames[-1] += ["pre", aux]
+            i += 1
+            continue
+        plain[-1] += (tok == "(") - (tok == ")")
+        frames[-1].append(tok)
+        i += 1
+    if len(frames) != 1 or plain[0]:
+        raise LustreError(f"unbalanced '(' in {name}'s definition")
+    types: dict[str, bool] = {}
+
+    def typed(n: str) -> bool:
+        return types[n] if n in types else is_boolean(n)
+
+    out: list[tuple[str, A.Expr, bool, str]] = []
+    for var, body in [*groups, (name, frames[0])]:
+        source = " ".join(body)
+        p = _Parser(_tokens(source), typed)
+        try:
+            e, boolean = p.ite()
+        except RecursionError:
+            return None
+        if p.peek() is not None:
+            raise LustreError(f"unexpected {p.peek()!r} in {name}'s definition")
+        if depth(e) > MAX_EXPR_DEPTH:
+            return None
+        types[var] = boolean
+        out.append((var, e, boolean, source))
+    return out
 
 
 def _tokens(text: str) -> list[tuple[str, int]]:

@@ -155,3 +155,25 @@ def test_the_audit_of_a_shielded_run_judges_the_export(tmp_path):
     got = _run("audit", "-r", EXPORT, "-b", BINDINGS, str(log), "--no-progress")
     assert got.exit_code == 0, got.output
     assert "0 violated" in got.output
+
+
+def test_a_component_not_checked_counts_as_unknown_and_names_the_cause(tmp_path):
+    """A component whose Internal variable fretc cannot read (a definition outside FRET's
+    Lustre subset) is not checked, its row naming that cause; the project exits with the
+    worst result of the others, the component counted as unknown (1), never 2 (issue 100)."""
+    doc = json.loads(Path(_project(tmp_path)).read_text(encoding="utf-8"))
+    doc["requirements"] = [r for r in doc["requirements"] if r["reqid"] in ("C1", "M3")]
+    doc["requirements"].append({"reqid": "M4", "project": "P",
+                                "fulltext": "mon shall always satisfy k | w"})
+    doc["variables"].append({"project": "P", "component_name": "mon", "variable_name": "k",
+                             "idType": "Internal", "dataType": "boolean",
+                             "assignment": "current o"})
+    path = tmp_path / "p3.json"
+    path.write_text(json.dumps(doc), encoding="utf-8")
+    got = _run("check", str(path), "--json", "--no-redundancy")
+    rows = {r["component"]: r for r in json.loads(got.output)["fret_components"]}
+    assert rows["ctrl"]["realizability"] == "realizable"
+    assert rows["mon"]["realizability"] == "not checked" and rows["mon"]["exit_code"] == 2
+    assert "k: FRET defines it, but its definition is outside FRET's Lustre subset" in \
+        rows["mon"]["reason"], rows["mon"]["reason"]
+    assert got.exit_code == 1, got.output
