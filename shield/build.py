@@ -231,7 +231,11 @@ def build_shield(compiled: Sequence[Any], inputs: Sequence[str], outputs: Sequen
     read = frozenset(v for c in [*compiled, *assumptions] for v in c.formalization.variables)
     unread = [f"{v}: declared an input, read by no requirement (not used)" for v in p.inputs
               if v not in read]
-    unread += [f"{v}: declared an output, read by no requirement (passed through unchanged)"
+    in_message = {v for c in p.components for g in c.messages if g.model is not None
+                  for v in g.model["passed"]}
+    unread += [f"{v}: declared an output, read by no requirement (passed through unchanged"
+               + (", where the decided message of its topic keeps its field; the C form has "
+                  "no field for it)" if v in in_message else ")")
                for v in p.outputs if v not in read]
     assert len(periods) <= 1  # (mixed periods were refused above)
     from fretc.shield.fallback import fallback_of

@@ -37,6 +37,15 @@ lost: it gives the fallback's outputs until ``P_shield_init`` (none without a fa
 Every buffer of the cases is in the state (no allocation); a step takes at most
 ``C_CASES_LIMIT`` corrections and as many walks of each candidate: constant time.
 
+**The outputs of one message are one message's** (:mod:`fretc.shield.message_model`, KP-124):
+a proposed number of a message group that is NaN or infinite replaces every output of the
+group (the fallback's values, else left to the correction), and a decision whose values of a
+group are not the proposal's is made one message as the Python form makes it
+(:func:`fretc.shield.runtime_values.as_message`): per group a table of the messages the
+bindings give its valuations (one double per field), a writer per number (a field, ``-x``,
+``abs(x)``), the write orders, and the bindings as C expressions over the fields
+(:func:`c_message`), constant time.
+
 A comparison of several variables (:mod:`fretc.shield.predicates`) is computed in doubles
 as the Python runtime computes it (:func:`c_term`); when an override changes an atom of an
 output cluster, the cluster's variables take the numbers recorded for the new valuation (a
@@ -50,6 +59,7 @@ decides without it (and does not fill it).
 
 from __future__ import annotations
 
+import itertools
 import keyword
 import math
 import re
@@ -61,8 +71,9 @@ from fretc.compiler.c_step import c_string
 from fretc.shield.build import Shield
 from fretc.shield.emit_python import tables
 from fretc.shield.runtime import BELIEF_LIMIT, CASES_LIMIT
+from fretc.shield.runtime_values import MESSAGE_ORDERS
 
-__all__ = ["render_c", "c_name", "c_names", "c_term"]
+__all__ = ["render_c", "c_name", "c_names", "c_term", "c_message"]
 
 _C_KEYWORDS = frozenset(
     "auto break case char const continue default do double else enum extern float for goto "
@@ -190,6 +201,8 @@ class _CMachine:
     out_vars: tuple[str, ...] = ()
     #: the fallback's value of each output atom (None: the shield has no fallback)
     fallback_atoms: tuple[int, ...] | None = None
+    #: the message groups' models (:func:`_c_models`): their decided values made one message
+    models: tuple[dict[str, Any], ...] = ()
 
     @property
     def n_in(self) -> int:
@@ -278,10 +291,87 @@ def _machines(shield: Shield, compared: set[str]) -> list[_CMachine]:
         out.append(_CMachine(k, t, first, numeric, groups, clusters, atom_vars, first_a,
                              in_vars, tuple(v for v in fields if v in reads),
                              tuple(int(b) for b in fb["atoms"][k]) if fb is not None
-                             else None))
+                             else None, _c_models(t)))
         first += len(t["requirements"])
         first_a += len(t["assumptions"])
     return out
+
+
+def c_message(t: tuple[Any, ...], want: str = "n") -> str:
+    """A message term (:mod:`fretc.shield.message_model`) as a C expression over the slots
+    ``msg[]`` (doubles; a boolean field 0/1), as
+    :func:`fretc.shield.runtime_values.message_value` computes it: ``want`` ``"b"`` an int
+    (a number read as ``!= 0``), ``"n"`` a double (a boolean as 1.0 or 0.0)."""
+    op = t[0]
+    if op == "slot":
+        text, kind = f"msg[{t[1]}]", "n"
+    elif op == "num":
+        text, kind = _double(t[1]), "n"
+    elif op == "not":
+        text, kind = f"(!{c_message(t[1], 'b')})", "b"
+    elif op in ("and", "or", "iff"):
+        sym = {"and": "&&", "or": "||", "iff": "=="}[op]
+        text, kind = f"({c_message(t[1], 'b')} {sym} {c_message(t[2], 'b')})", "b"
+    elif op == "cmp":
+        text = f"({c_message(t[2], 'n')} {_C_OPS[t[1]]} {c_message(t[3], 'n')})"
+        kind = "b"
+    elif op == "neg":
+        text, kind = f"(-{c_message(t[1], 'n')})", "n"
+    else:  # ("fn", "abs", a)
+        text, kind = f"fabs({c_message(t[2], 'n')})", "n"
+    if want == "b" and kind == "n":
+        return f"({text} != 0.0)"
+    if want == "n" and kind == "b":
+        return f"({text} ? 1.0 : 0.0)"
+    return text
+
+
+def _c_write(t: tuple[Any, ...]) -> list[str]:
+    """The C statements that set the slot a number's term ``t`` reads so that ``t`` gives
+    ``y`` (:func:`fretc.shield.runtime_values._message_write`), returning 0 when none can."""
+    lines = []
+    while t[0] != "slot":
+        if t[0] == "neg":
+            lines.append("y = -y;")
+            t = t[1]
+        else:
+            lines += ["if (y < 0.0) {", "    return 0;", "}",
+                      f"y = {c_message(t[2], 'n')} < 0.0 ? -y : y;"]
+            t = t[2]
+    return lines + [f"msg[{t[1]}] = y;"]
+
+
+def _c_models(t: dict[str, Any]) -> tuple[dict[str, Any], ...]:
+    """The models of machine table ``t``'s message groups as the C template reads them:
+    the group's index, its atoms, witness rows, the decided variables (name, kind, read
+    expression), the numbers written (index among them, C statements), the write orders
+    tried after the first (:data:`fretc.shield.runtime_values.MESSAGE_ORDERS`), the atoms
+    checked (atom index, variable index, op or None, constant) and the whole numbers."""
+    out = []
+    for gi, g in enumerate(t["groups"]):
+        model = g.get("message")
+        if not model:
+            continue
+        own = [(v, k, term) for v, k, term in model["reads"] if v not in model["passed"]]
+        names = [v for v, _k, _t in own]
+        terms = {v: term for v, _k, term in own}
+        writes = [(names.index(v), _c_write(terms[v])) for v in model["writes"]]
+        perms = (list(itertools.permutations(range(len(writes))))
+                 if 0 < len(writes) <= MESSAGE_ORDERS else [])
+        check = []
+        for j in model["check"]:
+            var, op, c = t["outputs"][j]
+            check.append((j, names.index(var), None if op is None else
+                          ["<", "<=", ">", ">=", "=", "!="].index(op), _double(c)
+                          if op is not None else "0.0"))
+        out.append({"i": gi, "atoms": model["atoms"],
+                    "rows": [(key, [_double(x) for x in row])
+                             for key, row in model["witness"].items()],
+                    "nslots": max(1, len(model["slots"])),
+                    "own": [(v, k, c_message(term, k)) for v, k, term in own],
+                    "writes": writes, "perms": perms, "check": check,
+                    "integers": [names.index(v) for v in model["integers"]]})
+    return tuple(out)
 
 
 #: slots of a machine's correction memo (direct-mapped; a power of two): an override whose
@@ -333,8 +423,13 @@ def render_c(shield: Shield, base: str) -> dict[str, str]:
                 compared.add(var)
     machines = _machines(shield, compared)
     outputs = [(v, v in shield.numbers) for v in shield.outputs if v in shield.read]
+    # (the outputs of one message: a proposal one of them cannot be read replaces them all,
+    # as the Python form's _replaced)
+    mates = [[(v, v in shield.numbers) for v in dict.fromkeys(m["outputs"][j][0]
+                                                              for j in g["atoms"])]
+             for m in t["machines"] for g in m["groups"]]
     ctx = {"p": base, "P": base.upper(), "shield": shield, "t": t, "machines": machines,
-           "compared": compared,
+           "compared": compared, "mates": [g for g in mates if len(g) > 1],
            "inputs": [(v, v in shield.numbers) for v in shield.inputs if v in shield.read],
            "outputs": outputs,
            # the runner's CSV header (FRET names: any text, never a printf format)

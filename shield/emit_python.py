@@ -16,6 +16,7 @@ from typing import Any
 from fretc.common.textsafe import python_doc
 from fretc.shield import runtime, runtime_values
 from fretc.shield.build import Shield
+from fretc.shield.message_model import group_atoms, table_of
 
 __all__ = ["tables", "render_python", "load_shield"]
 
@@ -30,8 +31,7 @@ def tables(shield: Shield) -> dict[str, Any]:
         for g in m.messages:
             if not g.valuations:
                 continue
-            atoms = sorted({j for vals, _f, _n in g.valuations for j, t in enumerate(texts)
-                            if t in vals})
+            atoms = group_atoms(texts, g.valuations)
             numbers, fields = {}, {}
             for vals, flds, nums in g.valuations:
                 key = sum(int(vals[texts[j]]) << i for i, j in enumerate(atoms))
@@ -39,7 +39,10 @@ def tables(shield: Shield) -> dict[str, Any]:
                 fields[key] = [(t, list(path), v) for (t, path), v in sorted(flds.items())]
             groups.append({"atoms": atoms, "topics": list(g.topics),
                            "numbers": dict(sorted(numbers.items())),
-                           "fields": dict(sorted(fields.items()))})
+                           "fields": dict(sorted(fields.items())),
+                           "message": None if g.model is None else table_of(
+                               g.model, texts, atoms, [a.spec for a in m.outputs],
+                               [v for v in m.output_variables if v in shield.integers])})
         machines.append({
             "requirements": list(m.requirements),
             "inputs": [a.spec for a in m.inputs],

@@ -33,8 +33,9 @@ from pathlib import Path
 from typing import Any
 
 from fretc.shield.machine import Machine
+from fretc.shield.message_model import group_atoms, table_of
 from fretc.shield.plan import ShieldError
-from fretc.shield.runtime_values import nearest, term_value, term_variables
+from fretc.shield.runtime_values import as_message, nearest, term_value, term_variables
 
 __all__ = ["fallback_of", "parse_fallback", "declared_fallback"]
 
@@ -169,7 +170,37 @@ def fallback_of(machines: Sequence[Machine], declared: dict[str, bool | float] |
                                           if w is not None and int(w) != b))
         atoms.append(bits)
         values.update(_numbers(m, bits, declared, integers))
+        values.update(_one_message(m, bits, values, declared, integers))
     return {"outputs": {v: values[v] for v in outputs if v in values}, "atoms": atoms}, []
+
+
+def _one_message(m: Machine, bits: list[int], values: dict[str, Any],
+                 declared: dict[str, Any], integers: Sequence[str]) -> dict[str, Any]:
+    """The fallback's values of each message group of ``m`` made one message (KP-124,
+    :func:`fretc.shield.runtime_values.as_message`: ``stopped`` with ``linear_speed = 0``
+    beside a ``forwarded_zero`` false is a message only with another field moving), the
+    outputs no requirement reads among them read from it (a declared one written into it).
+
+    Raises:
+        ShieldError: declared values no one message gives."""
+    out: dict[str, Any] = {}
+    texts = [a.text for a in m.outputs]
+    specs = [a.spec for a in m.outputs]
+    for g in m.messages:
+        if g.model is None:
+            continue
+        table = table_of(g.model, texts, group_atoms(texts, g.valuations), specs,
+                         [v for v in m.output_variables if v in integers])
+        own = [v for v, _k, _t in table["reads"] if v not in table["passed"]]
+        got = as_message(table, tuple(bits), specs, {v: values[v] for v in own},
+                         {v: declared[v] for v in table["passed"] if v in declared})
+        wrong = [f"{v}={declared[v]!r} (the message gives {got[v]!r})" for v in got
+                 if v in declared and got[v] != declared[v]]
+        if wrong:
+            raise ShieldError("the fallback's values are no one message the bindings give: "
+                              + ", ".join(wrong))
+        out.update(got)
+    return out
 
 
 def _shown(declared: dict[str, Any]) -> str:

@@ -19,7 +19,9 @@ requirements. Each tick:
   fields the bindings' inversion gives the corrected atoms
   (:mod:`fretc.shield.plan`, as ``fretc testgen --bindings`` writes tests); every message is
   read back through the bindings before it is published, and one that would not give the
-  decided values is an internal error, never sent;
+  decided atoms is an internal error, never sent; the decision returned is the published
+  messages', every output bound to them read back (KP-124: a number two outputs write, an
+  output no requirement reads);
 * the messages are given in an order in which a reader sampling between two of them (a
   recorder's receipt times, the audit's ticks at another phase) sees, at every point, a
   valuation the shield accepts from the tick's state (:meth:`ShieldRuntime.accepts`: the
@@ -164,7 +166,9 @@ class MessageShield:
         st.now = now_ns
         st.values.clear()
         props = {t: self.proposed.get(t) or self.make(t) for t in self.output_topics}
-        proposal = self._values(props, now_ns, strict=False)
+        proposal = self._values(props, now_ns, strict=False, every=True)
+        for v in [v for v, x in proposal.items() if x is None and not self._read(v)]:
+            del proposal[v]  # (an output no requirement reads, not on these topics)
         for v in self.runtime.outputs:
             proposal.setdefault(v, False)
         before = self.runtime.state
@@ -201,15 +205,17 @@ class MessageShield:
 
     def _as_published(self, d: Decision, msgs: list[tuple[str, Any]], now_ns: int
                       ) -> Decision:
-        """``d`` with each numeric output the messages carry read back from them: where two
-        outputs read one field, the number one of them gives is not the decided one (the
-        atoms are: :meth:`_gives`)."""
-        read = self._values({**self.published, **dict(msgs)}, now_ns)
-        numbers = {v: x for v, x in read.items() if v in d.outputs
-                   and isinstance(x, (int, float)) and not isinstance(x, bool)
-                   and isinstance(d.outputs[v], (int, float))
-                   and not isinstance(d.outputs[v], bool) and x != d.outputs[v]}
-        return d._replace(outputs={**d.outputs, **numbers}) if numbers else d
+        """``d`` with each output the published messages carry read back from them (KP-124):
+        where two outputs read one field, the number one of them gives is not the decided one
+        (the atoms are: :meth:`_gives`), and an output no requirement reads is what its field
+        of the published message holds, not the proposal's (a fault's message is made from
+        the default message)."""
+        held = {**self.published, **dict(msgs)}
+        read = self._values(held, now_ns, strict=False, every=True)
+        changed = {v: x for v, x in read.items() if v in d.outputs and x is not None
+                   and set(self.bindings.variables[v].topics) <= held.keys()
+                   and not _same(x, d.outputs[v])}
+        return d._replace(outputs={**d.outputs, **changed}) if changed else d
 
     def fallback_messages(self, now_ns: int) -> list[tuple[str, Any]]:
         """The messages of the shield's fallback (:meth:`ShieldRuntime.fault`; each made
@@ -303,17 +309,18 @@ class MessageShield:
                 return list(order)
         return msgs
 
-    def _values(self, msgs: dict[str, Any], now_ns: int, strict: bool = True
-                ) -> dict[str, Any]:
+    def _values(self, msgs: dict[str, Any], now_ns: int, strict: bool = True,
+                every: bool = False) -> dict[str, Any]:
         """The output variables' values on the messages ``msgs`` (topic -> message); not
         ``strict`` (a proposal), a value its binding cannot give is None (the shield then
-        replaces it) instead of the error."""
+        replaces it) instead of the error; ``every``: also the outputs no requirement reads
+        that have a binding (else only those the machines read)."""
         st = EvalState()
         st.msgs, st.now = dict(msgs), now_ns
         st.times = {t: now_ns for t in msgs}
         out: dict[str, Any] = {}
         for v in self.runtime.outputs:
-            if self._read(v):
+            if self._read(v) or (every and v in self.bindings.variables):
                 try:
                     out[v] = self.bindings.variables[v].evaluate(st)
                 except Exception:
@@ -412,8 +419,26 @@ class MessageShield:
 
     def _gives(self, m: Any, g: dict[str, Any], msgs: dict[str, Any], truths: list[bool],
                now_ns: int) -> bool:
-        values = self._values(msgs, now_ns)
-        return [truth(m.outs[j], values[m.outs[j][0]]) for j in g["atoms"]] == truths
+        """Whether the messages ``msgs`` give the group's atoms the values ``truths`` (a
+        message some of whose atoms have no truth value, a NaN the proposal's message held
+        in a field no output sets, gives none)."""
+        try:
+            values = self._values(msgs, now_ns)
+            return [truth(m.outs[j], values[m.outs[j][0]]) for j in g["atoms"]] == truths
+        except (TypeError, ValueError, SignalError):
+            return False
+
+
+def _same(a: Any, b: Any) -> bool:
+    """Two output values alike: booleans as booleans, numbers exactly, NaN as NaN."""
+    flags = [isinstance(x, bool) or type(x).__name__ == "bool_" for x in (a, b)]
+    if any(flags):
+        return all(flags) and bool(a) == bool(b)
+    try:
+        x, y = float(a), float(b)
+    except (TypeError, ValueError):
+        return bool(a == b)
+    return x == y or (x != x and y != y)
 
 
 def _fault(d: Decision) -> bool:

@@ -45,6 +45,7 @@ from fretc.check.safety_game import game_atoms
 from fretc.common.errors import FretcError
 from fretc.compiler import ir
 from fretc.shield import predicates as preds
+from fretc.shield.message_model import model_of
 from fretc.compiler.ir import Node
 from fretc.compiler.printers import to_smv
 from fretc.signals.bindings.expression import BinOp, Const, Expr, Field, FuncCall, UnaryOp
@@ -76,6 +77,12 @@ class MessageGroup:
     valuations: list[tuple[dict[str, bool], dict[tuple[str, tuple[str, ...]], Any],
                            dict[str, float]]] = field(default_factory=list)
     topics: list[str] = field(default_factory=list)
+    #: the outputs bound to its topics that no requirement reads (passed through)
+    passed: list[str] = field(default_factory=list)
+    #: its bindings as terms over the message's fields, so that every form decides values
+    #: one message gives (:mod:`fretc.shield.message_model`); None when they are no such
+    #: terms (noted)
+    model: dict[str, Any] | None = None
 
 
 @dataclass
@@ -449,9 +456,11 @@ def _component(items: list[CheckItem], inputs: list[str], groups: list[list[str]
     for g in groups:
         if set(g) & used:
             group = MessageGroup([v for v in g if v in used], topics=sorted(
-                {t for v in g for t in bindings.variables[v].topics} if bindings else ()))
-            ctl_inv = ir.and_(ctl_inv, _message_constraint(
-                [a for a in atoms if _variable(a) in g], bindings, notes, group))
+                {t for v in g for t in bindings.variables[v].topics} if bindings else ()),
+                passed=[v for v in g if v not in used])
+            mine = [a for a in atoms if _variable(a) in g]
+            ctl_inv = ir.and_(ctl_inv, _message_constraint(mine, bindings, notes, group))
+            _message_model(group, mine, bindings, clusters, notes)
             messages.append(group)
     return Component(items, env_inv, ctl_inv, messages, clusters, names, game_pts,
                      game_inputs, list(assumptions), watch, raw_pts)
@@ -511,6 +520,33 @@ def _message_constraint(atoms: list[Node], bindings: Bindings | None, notes: lis
         group.valuations.clear()
         return ir.TRUE
     return _balanced_and(excluded)
+
+
+def _message_model(group: MessageGroup, atoms: list[Node], bindings: Bindings | None,
+                   clusters: list[preds.Cluster], notes: list[str]) -> None:
+    """Give ``group`` (its valuations solved) its model (:mod:`fretc.shield.message_model`),
+    or note why the forms cannot make its decided values one message."""
+    if bindings is None or not group.valuations:
+        return
+    names = ", ".join(group.variables)
+    clustered = sorted(set(group.variables) & {v for c in clusters for v in c.variables})
+    if clustered:
+        notes.append(f"the decided values of {names} are not made one message by the Python "
+                     f"and C forms: {', '.join(clustered)} in a comparison of several "
+                     "variables")
+        return
+    kinds = {_variable(a): ("b" if a.op == "ap" else "n") for a in atoms}
+    specs: dict[str, tuple[str, str | None, Any]] = {}
+    for a in atoms:
+        sc = simple_comparison(a)
+        specs[to_smv(a)] = ((ir.name_of(a), None, None) if a.op == "ap" or sc is None
+                            else (sc[0], sc[1], float(sc[2])))
+    model, why = model_of(group.variables, group.passed, kinds, bindings, group.valuations,
+                          specs)
+    if model is None and why:
+        notes.append(f"the decided values of {names} are not made one message by the Python "
+                     f"and C forms (the ROS 2 node makes its messages): {why}")
+    group.model = model
 
 
 def _balanced_and(xs: list[Node]) -> Node:

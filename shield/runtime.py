@@ -17,7 +17,13 @@ third element is then its term, :func:`term_value`: ``(variable, "pred", term)``
 {valuation: [(topic, path, value)]}}``, a valuation being the atoms' values as bits (first
 atom least significant): the message fields the bindings give it by and that message's
 numbers (:mod:`fretc.shield.plan`); a numeric output of a group whose boolean atoms an
-override changed takes them (:mod:`fretc.shield.messages` publishes the fields). A machine's
+override changed takes them (:mod:`fretc.shield.messages` publishes the fields). A group's
+``"message"`` (None when its bindings are no such terms) is its bindings as terms over the
+message's fields (:mod:`fretc.shield.message_model`): a decision that is not the proposal's
+message is made one, the decided numbers written into the message solved for the decided
+valuation and its values read back (:func:`as_message`), so that the outputs the machines step
+on and report are one message's (KP-124: ``cmd_linear = 0.0`` beside ``driving_forward``,
+both of ``/cmd_vel.linear.x``, was none). A machine's
 ``"clusters"`` (:mod:`fretc.shield.predicates`) are ``{"atoms": [output atom indices],
 "variables": [...], "numbers": {valuation: {variable: value}}}``: when an override changes
 one of a cluster's atoms, its variables take the numbers recorded for the new valuation.
@@ -47,10 +53,12 @@ infinite number (no actuator takes one) cannot be read. Then:
   (a shield without a fallback), the machine no longer knows its state: it gives the
   fallback's outputs (none without one) at every tick until :meth:`ShieldRuntime.reset`,
   and ``Decision.fault`` says so;
-* a **proposed output** that cannot be read is replaced, never passed on: by the
-  fallback's value of that variable, then decided as any proposal (the state moves);
-  without a fallback its atoms are left to the correction (any value of theirs costs
-  nothing). ``Decision.fault`` says which and why; ``overridden`` is true.
+* a **proposed output** that cannot be read is replaced, never passed on, and so is every
+  output of its message group (they were read from one message that cannot be read: a
+  ``driving_forward`` read from ``linear.x = +inf`` is not kept beside the replaced
+  ``cmd_linear``): by the fallback's value of each variable, then decided as any proposal
+  (the state moves); without a fallback their atoms are left to the correction (any value
+  of theirs costs nothing). ``Decision.fault`` says which and why; ``overridden`` is true.
 
 **Assumptions of the environment** (``fretc shield --assume``): a machine's ``"assumptions"``
 (ids) and ``"assumed"`` (per assumption the root of "it has held at every tick so far") are
@@ -66,7 +74,7 @@ import math
 import numbers
 from typing import Any, NamedTuple
 
-from fretc.shield.runtime_values import (_OPS, kinds, nearest, term_value,
+from fretc.shield.runtime_values import (_OPS, as_message, kinds, nearest, term_value,
                                          term_variables, truth)
 
 __all__ = ["Decision", "ShieldRuntime", "CACHE_LIMIT", "BELIEF_LIMIT", "CASES_LIMIT", "truth",
@@ -234,6 +242,12 @@ class _Machine:
         self.weights = t["weights"]
         self.big = 1 << preferences
         self.groups = t["groups"]
+        #: the groups' models (module docstring), each with the variables it decides
+        self.models = [(g["message"], [v for v, _k, _t in g["message"]["reads"]
+                                       if v not in g["message"]["passed"]])
+                       for g in self.groups if g.get("message")]
+        #: the outputs no requirement reads that a model writes and reads back
+        self.passed = [v for model, _own in self.models for v in model["passed"]]
         self.cache: dict[tuple[tuple[int, ...], tuple[int, ...], tuple[int, ...]],
                          tuple[bool, tuple[int, ...]]] = {}
         #: the corrections made, by the same key (state, input atoms, proposed atoms):
@@ -334,7 +348,7 @@ class _Machine:
         return c
 
     def decide(self, inputs: dict[str, Any], proposed: dict[str, Any],
-               unknown: frozenset[str] = frozenset()
+               unknown: frozenset[str] = frozenset(), replaced: frozenset[str] = frozenset()
                ) -> tuple[dict[str, Any], tuple[str, ...], tuple[str, ...], tuple[int, ...],
                           tuple[str, ...]]:
         """This machine's decision for one tick, nothing moved: the corrected outputs
@@ -342,16 +356,20 @@ class _Machine:
         assumptions broken so far (module docstring).
         ``inputs`` and ``proposed`` hold checked values (:func:`read_value`) of every
         variable the machine reads but the output variables ``unknown`` (proposals that
-        could not be read: their atoms are left to the correction and always changed)."""
+        could not be read: their atoms are left to the correction and always changed);
+        ``replaced`` the proposals replaced (their message is not written)."""
         ins = tuple([f(inputs) for f in self.in_tests])
         if unknown:
             unk = frozenset(j for v in unknown for j in self.reading.get(v, ()))
             if unk:
-                return self._unknown(ins, proposed, unk)
+                decided, why, what, nxt, gone, outs = self._unknown(ins, proposed, unk)
+                return (self._one_message(decided, outs, proposed, replaced), why, what, nxt,
+                        gone)
         prop = tuple([f(proposed) for f in self.out_tests])
         safe, nxt = self.move(ins, prop)
         if safe:
-            return ((self._whole(proposed, prop) if self.integers else {}), (), (), nxt,
+            kept = self._whole(proposed, prop) if self.integers else {}
+            return (self._one_message(kept, prop, proposed, replaced), (), (), nxt,
                     self._broken(ins, prop) if self.assumed else ())
         key = (self.state, ins, prop)
         got = self.corrections.get(key)
@@ -368,8 +386,21 @@ class _Machine:
             got = self.corrections[key] = (outs, (reasons if changed else ()), changed,
                                            self._plan(outs, changed))
         outs, reasons, changed, plan = got
-        return (self._values(plan, proposed), reasons, changed, self.move(ins, outs)[1],
-                self._broken(ins, outs))
+        return (self._one_message(self._values(plan, proposed), outs, proposed, replaced),
+                reasons, changed, self.move(ins, outs)[1], self._broken(ins, outs))
+
+    def _one_message(self, values: dict[str, Any], outs: tuple[int, ...],
+                     proposed: dict[str, Any], replaced: frozenset[str]) -> dict[str, Any]:
+        """``values`` (the decided outputs, a variable missing there keeping its proposal)
+        with each message group's made one message (module docstring, :func:`as_message`):
+        ``outs`` the decided atoms, ``replaced`` the proposals replaced this tick."""
+        for model, own in self.models:
+            decided = {v: values.get(v, proposed.get(v)) for v in own}
+            got = as_message(model, outs, self.outs, decided, proposed,
+                             any(v in replaced for v in own))
+            if got:
+                values = {**values, **got}
+        return values
 
     @property
     def belief(self) -> tuple[tuple[int, ...], ...]:
@@ -400,13 +431,15 @@ class _Machine:
 
     def decide_cases(self, inputs: dict[str, Any], unread: frozenset[str],
                      proposed: dict[str, Any], unknown: frozenset[str],
-                     fallback: tuple[list[int], dict[str, Any]] | None
+                     fallback: tuple[list[int], dict[str, Any]] | None,
+                     replaced: frozenset[str] = frozenset()
                      ) -> tuple[dict[str, Any], tuple[str, ...], tuple[str, ...],
                                 tuple[tuple[int, ...], ...] | None, tuple[str, ...], str]:
         """:meth:`decide` for a belief of several states or inputs ``unread`` (variables
         whose values could not be read; ``inputs`` holds the others'): the decision safe in
         every case (module docstring), nothing moved. ``fallback``: this machine's fallback
-        atoms and the fallback's outputs (None: no fallback).
+        atoms and the fallback's outputs (None: no fallback); ``replaced`` as for
+        :meth:`decide`.
 
         Returns ``(outputs, reasons, changed, next belief, broken, why)``: the next belief
         sorted, None when the machine no longer knows its state (``why`` then says why and
@@ -452,6 +485,7 @@ class _Machine:
                                        for st, i in cases):
                     reasons = self.reqs  # (no requirement alone: the machine's together)
             values = self._values(self._plan(outs, changed), proposed)
+        values = self._one_message(values, outs, proposed, replaced)
         nexts = sorted({self.move(i, outs, st)[1] for st, i in cases})
         if len(nexts) > BELIEF_LIMIT:
             return self._lost(fallback, proposed, f"more than {BELIEF_LIMIT} states it may "
@@ -472,7 +506,7 @@ class _Machine:
         if fallback is None:
             return {}, (), tuple(self.texts), None, (), why + "; no fallback: no outputs"
         bits, values = fallback
-        mine = {v: values[v] for v in self.out_kinds if v in values}
+        mine = {v: values[v] for v in [*self.out_kinds, *self.passed] if v in values}
         changed = []
         for j, (spec, f, t) in enumerate(zip(self.outs, self.out_tests, self.texts)):
             need = term_variables(spec[2]) if spec[1] == "pred" else {spec[0]}
@@ -496,18 +530,18 @@ class _Machine:
 
     def _unknown(self, ins: tuple[int, ...], proposed: dict[str, Any], unk: frozenset[int]
                  ) -> tuple[dict[str, Any], tuple[str, ...], tuple[str, ...], tuple[int, ...],
-                            tuple[str, ...]]:
+                            tuple[str, ...], tuple[int, ...]]:
         """:meth:`decide` when the output atoms ``unk`` read a proposal that could not be
         read: the safe outputs nearest the rest of the proposal, every atom of ``unk``
         counted changed (its variable's value is never the proposal's); no reason (the
-        fault is the proposal's)."""
+        fault is the proposal's); and the decided atoms."""
         prop = tuple([0 if j in unk else f(proposed) for j, f in enumerate(self.out_tests)])
         outs = self.correct(ins, prop, unk)
         changed = tuple(t for j, (t, p, o) in enumerate(zip(self.texts, prop, outs))
                         if p != o or j in unk)
         plan = self._plan(outs, changed)
         return (self._values(plan, proposed), (), changed, self.move(ins, outs)[1],
-                self._broken(ins, outs))
+                self._broken(ins, outs), outs)
 
     def _values(self, plan: tuple[dict[str, Any], list[str], list[tuple[Any, ...]]],
                 proposed: dict[str, Any]) -> dict[str, Any]:
@@ -595,6 +629,16 @@ class ShieldRuntime:
                 self.output_kinds.setdefault(v, k)
         #: the outputs no machine reads, passed through
         self.passed = [v for v in self.outputs if v not in self.output_kinds]
+        #: each output variable of a message group -> the group's variables: read from one
+        #: message, replaced together when one cannot be read (module docstring)
+        self.mates: dict[str, tuple[str, ...]] = {}
+        for m in self.machines:
+            for g in m.groups:
+                group = tuple(dict.fromkeys(m.outs[j][0] for j in g["atoms"]))
+                self.mates.update({v: group for v in group})
+        #: the outputs no machine reads that a message group's model writes (module
+        #: docstring): their proposals go to the machines
+        self.written = [v for m in self.machines for v in m.passed]
 
     def reset(self) -> None:
         """Back to the initial state (before the first tick)."""
@@ -666,11 +710,13 @@ class ShieldRuntime:
             frozen: frozenset[str] = frozenset()
         except Unreadable:
             props, faults, replaced, frozen = self._replaced(proposed)
+        if self.written:
+            props = {**{v: proposed[v] for v in self.written if v in proposed}, **props}
         if unread or any(m.others or m.lost for m in self.machines):
             return self._step_cases(ins, frozenset(unread), props, faults, replaced, frozen,
                                     proposed, [f"input {why}" for why in unread.values()])
         # every machine decides before any moves: a step is all or nothing
-        moves = [m.decide(ins, props, frozen) for m in self.machines]
+        moves = [m.decide(ins, props, frozen, frozenset(replaced)) for m in self.machines]
         outputs = {v: proposed[v] for v in self.passed if v in proposed}
         outputs.update(props)
         reasons: list[str] = []
@@ -717,7 +763,8 @@ class ShieldRuntime:
         (:meth:`_Machine.decide_cases`), all before any moves."""
         fb = self.fallback
         moves = [m.decide_cases(ins, unread, props, frozen,
-                                (fb["atoms"][k], fb["outputs"]) if fb is not None else None)
+                                (fb["atoms"][k], fb["outputs"]) if fb is not None else None,
+                                frozenset(replaced))
                  for k, m in enumerate(self.machines)]
         outputs = {v: proposed[v] for v in self.passed if v in proposed}
         outputs.update(props)
@@ -757,23 +804,28 @@ class ShieldRuntime:
     def _replaced(self, proposed: dict[str, Any]
                   ) -> tuple[dict[str, Any], list[str], list[str], frozenset[str]]:
         """A proposal some of whose values cannot be read (module docstring): the values
-        read, each other replaced by the fallback's (or left to the correction: the
-        ``unknown`` variables); the faults and the replaced variables."""
+        read, each other and every variable of its message group (:attr:`mates`) replaced
+        by the fallback's (or left to the correction: the ``unknown`` variables); the faults
+        and the replaced variables."""
         props: dict[str, Any] = {}
         unknown: set[str] = set()
         faults: list[str] = []
-        replaced: list[str] = []
+        bad: set[str] = set()
         fallback = self.fallback["outputs"] if self.fallback is not None else {}
         for v, k in self.output_kinds.items():
             try:
                 props[v] = read_value(v, k, proposed, True)
             except Unreadable as exc:
                 faults.append(f"proposal {exc}")
-                replaced.append(v)
-                if v in fallback:
-                    props[v] = fallback[v]
-                else:
-                    unknown.add(v)
+                bad.add(v)
+        replaced = [v for v in self.output_kinds
+                    if v in bad or any(w in bad for w in self.mates.get(v, ()))]
+        for v in replaced:
+            if v in fallback:
+                props[v] = fallback[v]
+            else:
+                props.pop(v, None)
+                unknown.add(v)
         return props, faults, replaced, frozenset(unknown)
 
     def fault(self, why: str, proposed: dict[str, Any]) -> Decision:

@@ -1,7 +1,8 @@
 """The values of a shield's atoms, standard library only: an atom's truth for a variable's
 value, the comparisons of several variables and their terms (:mod:`fretc.shield.predicates`),
-the kinds of the variables atoms read, and the number nearest a proposal that gives a
-valuation of a variable's comparisons (the corrected numbers).
+the kinds of the variables atoms read, the number nearest a proposal that gives a
+valuation of a variable's comparisons (the corrected numbers), and the decided values of a
+message group made one message (:func:`as_message`, :mod:`fretc.shield.message_model`).
 
 Part of the shield's step (:mod:`fretc.shield.runtime`): ``fretc shield --emit python``
 writes this module's source, then the runtime's, into the generated module
@@ -10,11 +11,17 @@ writes this module's source, then the runtime's, into the generated module
 
 from __future__ import annotations
 
+import itertools
 import math
 from collections.abc import Callable
 from typing import Any
 
-__all__ = ["truth", "term_value", "term_variables", "kinds", "nearest"]
+__all__ = ["truth", "term_value", "term_variables", "kinds", "nearest", "message_value",
+           "as_message", "MESSAGE_ORDERS"]
+
+#: the most numbers of one message whose write orders are all tried (their permutations);
+#: past it, only the first order (:func:`as_message`)
+MESSAGE_ORDERS = 4
 
 _OPS: dict[str, Callable[[float, float], bool]] = {
     "<": lambda x, c: x < c, "<=": lambda x, c: x <= c, ">": lambda x, c: x > c,
@@ -156,3 +163,113 @@ def _nearest_whole(specs: list[tuple[str, str | None, float | None]], truths: li
         raise ValueError("no whole number gives the comparisons of " + specs[0][0]
                          + " those values")
     return best
+
+
+def message_value(t: tuple[Any, ...], msg: list[Any]) -> Any:
+    """A message term (:mod:`fretc.shield.message_model`) on the message ``msg`` (one value
+    per slot, doubles; a boolean field 0/1): a bool for ``not and or iff cmp``, else a
+    number."""
+    op = t[0]
+    if op == "slot":
+        return msg[t[1]]
+    if op == "num":
+        return t[1]
+    if op == "not":
+        return not message_value(t[1], msg)
+    if op == "and":
+        return bool(message_value(t[1], msg)) and bool(message_value(t[2], msg))
+    if op == "or":
+        return bool(message_value(t[1], msg)) or bool(message_value(t[2], msg))
+    if op == "iff":
+        return bool(message_value(t[1], msg)) == bool(message_value(t[2], msg))
+    if op == "cmp":
+        return _OPS[t[1]](message_value(t[2], msg), message_value(t[3], msg))
+    if op == "neg":
+        return -message_value(t[1], msg)
+    return abs(message_value(t[2], msg))  # ("fn", "abs", a)
+
+
+def _message_write(t: tuple[Any, ...], msg: list[Any], x: float) -> bool:
+    """Set the slot the number's term ``t`` reads so that ``t`` gives ``x`` (a field; ``-a``;
+    ``abs(a)``, ``a``'s sign kept, + when it is not negative); False when it cannot."""
+    while t[0] != "slot":
+        if t[0] == "neg":
+            x, t = -x, t[1]
+        elif t[0] == "fn" and t[1] == "abs":
+            if x < 0:
+                return False
+            x, t = (-x if message_value(t[2], msg) < 0 else x), t[2]
+        else:
+            return False
+    msg[t[1]] = x
+    return True
+
+
+def _read_as(kind: str, t: tuple[Any, ...], msg: list[Any]) -> Any:
+    x = message_value(t, msg)
+    return bool(x) if kind == "b" else float(x)
+
+
+def _same(a: Any, b: Any) -> bool:
+    if a is None or b is None:
+        return False
+    if isinstance(a, bool) or isinstance(b, bool):
+        return bool(a) == bool(b)
+    return bool(a == b)
+
+
+def as_message(model: dict[str, Any], bits: tuple[int, ...], specs: list[Any],
+               decided: dict[str, Any], proposed: dict[str, Any], fresh: bool = False
+               ) -> dict[str, Any]:
+    """The values of one message group as one message gives them (KP-124,
+    :mod:`fretc.shield.message_model`): ``model`` the group's table, ``bits`` the machine's
+    decided output atoms (``specs`` theirs), ``decided`` the decided value of each of the
+    group's variables the requirements read, ``proposed`` the proposal (the raw values of
+    the ``passed`` ones; ``fresh``: the proposal's message could not be read, so none of its
+    values is written). Returns the values to use (empty: the decided ones are the
+    proposal's message, or no message was found, which the tables exclude).
+
+    The message: the witness of the decided valuation with each number of ``writes``
+    written through its binding, those the decision kept first (so the corrected ones decide
+    a field two numbers read), then in every other order (all when at most
+    :data:`MESSAGE_ORDERS`), then the witness alone; the first whose values give ``bits``
+    (and whole numbers for ``integers``) is read back through the terms. A ``passed``
+    variable's proposal is then written where that changes no other value."""
+    own = [(v, k, t) for v, k, t in model["reads"] if v not in model["passed"]]
+    if any(decided.get(v) is None for v, _k, _t in own):
+        return {}
+    kept = all(_same(decided.get(v), proposed.get(v)) for v, _k, _t in own)
+    if kept and not (fresh and model["passed"]):
+        return {}
+    base = model["witness"].get(sum(bits[j] << i for i, j in enumerate(model["atoms"])))
+    if base is None:
+        return {}
+    terms = {v: t for v, _k, t in model["reads"]}
+    writes = model["writes"]
+    first = tuple(sorted(writes, key=lambda v: not _same(decided[v], proposed.get(v))))
+    orders: list[tuple[str, ...]] = [first]
+    if len(writes) <= MESSAGE_ORDERS:
+        orders += [o for o in itertools.permutations(writes) if o != first]
+    for order in [*orders, ()]:
+        msg = list(base)
+        if not all(_message_write(terms[v], msg, float(decided[v])) for v in order):
+            continue
+        got = {v: _read_as(k, t, msg) for v, k, t in own}
+        if all(truth(specs[j], got[specs[j][0]]) == bool(bits[j]) for j in model["check"]) \
+                and all(math.isinf(got[v]) or got[v] == math.floor(got[v])
+                        for v in model["integers"]):
+            break
+    else:
+        return {}
+    for v in model["passed"]:
+        x = proposed.get(v)
+        if fresh or isinstance(x, bool) or not isinstance(x, (int, float)) \
+                or not math.isfinite(x):
+            continue
+        trial = list(msg)
+        if _message_write(terms[v], trial, float(x)) and all(
+                _same(_read_as(k, t, trial), got[w]) for w, k, t in own):
+            msg = trial
+    got.update({v: _read_as(k, terms[v], msg) for v, k, _t in model["reads"]
+                if v in model["passed"]})
+    return {v: got[v] for v in model["passed"]} if kept else got
