@@ -189,14 +189,14 @@ class Setup:
         the output bound to it (``linear.x`` from the signed velocity, else ``cmd_linear``
         or the speed; ``angular.z`` from the speed; ``linear.y`` from ``lateral``, 0
         without it), ``angular.x`` (no output but ``forwarded_zero`` reads it) zero unless
-        ``forwarded_zero`` is false while every other field is zero (then 1): a complete
-        writer, so outputs some message gives come back."""
+        ``forwarded_zero`` is false while no other field is a number other than zero (then
+        1): a complete writer, so outputs some message gives come back."""
         o = outputs
         lx = o.get("linear_velocity", o.get("cmd_linear", o.get("linear_speed", 0.0)))
         az = o.get("angular_speed", 0.0)
         ly = o.get("lateral", 0.0)
-        ax = 1.0 if o.get("forwarded_zero") is False and lx == 0 and az == 0 and ly == 0 \
-            else 0.0
+        moving = lx != 0 or az != 0 or (ly == ly and ly != 0)  # (a NaN compares unknown)
+        ax = 1.0 if o.get("forwarded_zero") is False and not moving else 0.0
         return {"/cmd_vel_out": self.message("/cmd_vel_out", linear__x=float(lx),
                                              linear__y=float(ly), angular__x=ax,
                                              angular__z=float(az)),
