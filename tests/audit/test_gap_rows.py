@@ -4,8 +4,8 @@ cells against brute force, FRET's interval semantics (:func:`fretc.monitors.inte
 verdict_of`, another evaluator than the audit's pt formula) over every completion, each gap
 row filled with one or two ticks of any values and each unknown cell with any value. A
 verdict the audit gives is the one every completion gives (satisfied or vacuous: every one
-holds; violated: every one violates); where the completions differ it is unknown. Issue 104's
-two traces, where one tick in the gap and two ticks disagree, are unknown."""
+holds; violated: every one violates); where the completions differ it is unknown. Two traces
+where one tick in the gap and two ticks disagree are unknown."""
 
 from __future__ import annotations
 
@@ -131,7 +131,7 @@ def test_a_gap_row_verdict_is_what_every_count_and_filling_gives_sweep(
 
 
 @pytest.mark.tor("TOR-DMG-002")
-def test_issue_104_traces_are_unknown(plan, tmp_path):
+def test_traces_one_gap_tick_and_two_disagree_on_are_unknown(plan, tmp_path):
     """S7 on ``0,1,3 / unknown,1,0 / 1,0,1 / gap / 0,1,4.5`` was satisfied, S1 on ``0,1,4.5 /
     gap / 1,1,6 / 1,1,3 / 1,1,unknown`` vacuous: one tick in the gap meets them, two ticks
     (``0,0,0`` twice; ``1,0,0`` then ``0,0,0``) break them."""

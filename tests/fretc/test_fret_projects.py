@@ -160,7 +160,7 @@ def test_the_audit_of_a_shielded_run_judges_the_export(tmp_path):
 def test_a_component_not_checked_counts_as_unknown_and_names_the_cause(tmp_path):
     """A component whose Internal variable fretc cannot read (a definition outside FRET's
     Lustre subset) is not checked, its row naming that cause; the project exits with the
-    worst result of the others, the component counted as unknown (1), never 2 (issue 100)."""
+    worst result of the others, the component counted as unknown (1), never 2."""
     doc = json.loads(Path(_project(tmp_path)).read_text(encoding="utf-8"))
     doc["requirements"] = [r for r in doc["requirements"] if r["reqid"] in ("C1", "M3")]
     doc["requirements"].append({"reqid": "M4", "project": "P",

@@ -1,4 +1,4 @@
-"""FRET definitions nested through ``pre`` past the depth of one expression (issue 100: LMCPS's NN
+"""FRET definitions nested through ``pre`` past the depth of one expression (LMCPS's NN
 defines ``xt``, ``yt``, ``zt`` as 199-deep ``c0 -> pre(c1 -> pre(...))`` tables of values over
 time) are read as one equation per ``pre`` group (:func:`fretc.fretish.lustre.pre_groups`) and
 computed tick by tick as the streams they are: the column the audit computes equals a Lustre

@@ -162,7 +162,7 @@ def test_a_verdict_across_gaps_is_what_every_count_and_filling_gives_sweep(text,
 
 @pytest.mark.tor("TOR-VER-004")
 @pytest.mark.parametrize("text, rows, gap", [
-    # issue 104: one tick in the gap meets the obligation, two ticks break it
+    # one tick in the gap meets the obligation, two ticks break it
     ("upon !p the sw shall at the next timepoint satisfy q | x > 1",
      [(False, True, False, 1.0), (False, True, False, 0.0), (True, False, False, 1.0),
       (False, False, False, 0.0), (False, True, False, 4.5)], 3),
