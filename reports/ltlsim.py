@@ -15,16 +15,29 @@ server for the requirements (``GET /api/requirements``) and posts the trace as J
 (``POST /api/judge``, body ``{"ticks": n, "values": {variable: [value per tick]}}``). The
 server (:func:`make_server`, the standard library's ``http.server``) listens on 127.0.0.1
 only and answers only requests whose ``Host`` is that address or ``localhost`` (a page of
-another site cannot reach it through DNS rebinding).
+another site cannot reach it through DNS rebinding), and only requests of the page's own
+origin, ``http://127.0.0.1:PORT`` or ``http://localhost:PORT``: a request whose ``Origin``
+(without one, whose ``Referer``) is another is refused (403), and a ``POST`` must carry one
+of them naming that origin (a browser's fetch and form posts send ``Origin``: a page of
+another site could otherwise post traces through the user's browser; the Fetch standard,
+"Origin header"). A malformed request (a method other than GET and POST, a ``Content-Length``
+missing or not a byte count, a body that is not UTF-8 JSON, nested past what the JSON reader
+takes, a number past a double) is answered 4xx with a JSON ``{"error"}``, never a traceback,
+and the server goes on serving.
 """
 
 from __future__ import annotations
 
 import json
 import math
+import re
+import socket
+import sys
+from http import HTTPStatus
 from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
 from importlib import resources
 from typing import Any
+from urllib.parse import urlsplit
 
 import numpy as np
 
@@ -84,15 +97,44 @@ def _column(name: str, kind: str, values: Any, n: int) -> np.ndarray:
         bad = next((i for i, v in enumerate(values) if not isinstance(v, bool)), None)
         if bad is not None:
             raise TraceError(f"variable {name!r} at tick {bad}: true or false expected, "
-                             f"got {values[bad]!r}")
+                             f"got {_brief(values[bad])}")
         return np.array(values, dtype=np.bool_)
     out = np.empty(n, dtype=np.float64)
     for i, v in enumerate(values):
-        if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
+        x = _finite(v)
+        if x is None:
             raise TraceError(f"variable {name!r} at tick {i}: a finite number expected, "
-                             f"got {v!r}")
-        out[i] = float(v)
+                             f"got {_brief(v)}")
+        out[i] = x
     return out
+
+
+def _finite(v: Any) -> float | None:
+    """``v`` as a finite double, None when it is not a number (a boolean is not) or is
+    none (NaN, an infinity, an integer past the doubles' range: JSON's integers have no
+    bound, RFC 8259 section 6)."""
+    if isinstance(v, bool) or not isinstance(v, (int, float)):
+        return None
+    try:
+        x = float(v)
+    except OverflowError:
+        return None
+    return x if math.isfinite(x) else None
+
+
+def _brief(v: Any) -> str:
+    """A short, safe showing of a posted JSON value in an error message: its kind for an
+    array or an object (whose repr could be long or nested past the recursion limit), the
+    first characters of a string, the digit count of a long integer."""
+    if isinstance(v, list):
+        return "an array"
+    if isinstance(v, dict):
+        return "an object"
+    if isinstance(v, str):
+        return repr(v[:40]) + ("..." if len(v) > 40 else "")
+    if isinstance(v, int) and not isinstance(v, bool) and abs(v) >= 10 ** 30:
+        return f"an integer of {len(str(abs(v)))} digits"
+    return json.dumps(v)
 
 
 def _columns(variables: list[dict], trace: Any) -> tuple[dict[str, np.ndarray], int]:
@@ -101,7 +143,8 @@ def _columns(variables: list[dict], trace: Any) -> tuple[dict[str, np.ndarray], 
         raise TraceError('the trace is not a JSON object {"ticks": n, "values": {...}}')
     n = trace.get("ticks")
     if isinstance(n, bool) or not isinstance(n, int) or not 1 <= n <= MAX_TICKS:
-        raise TraceError(f'"ticks": a whole number from 1 to {MAX_TICKS} expected, got {n!r}')
+        raise TraceError(f'"ticks": a whole number from 1 to {MAX_TICKS} expected, got '
+                         f'{_brief(n)}')
     values = trace.get("values")
     if not isinstance(values, dict):
         raise TraceError('"values": an object {variable: [value per tick]} expected')
@@ -190,64 +233,242 @@ def _requirements_json(compiled: list, ticks: int) -> dict:
 def make_server(compiled: list, port: int = 0, ticks: int = 12) -> ThreadingHTTPServer:
     """The simulator's HTTP server on 127.0.0.1:``port`` (0: a free port; the bound one is
     ``server.server_address[1]``); ``ticks`` the length of the page's first trace. Serve it
-    with ``serve_forever()``.
+    with ``serve_forever()``. What it answers: the module docstring.
 
     Raises:
         OSError: the port cannot be bound.
     """
-    page = page_html().encode("utf-8")
-    meta = json.dumps(_requirements_json(compiled, ticks)).encode("utf-8")
+    return _Server(("127.0.0.1", port), compiled, ticks)
 
-    class Handler(BaseHTTPRequestHandler):
-        server_version = "fretc-ltlsim"
 
-        def log_message(self, format: str, *args: Any) -> None:  # noqa: A002 - quiet
+class _Server(ThreadingHTTPServer):
+    """The simulator's server: the page and the requirements' JSON made once, the
+    requirements judged per request (:class:`_Handler`)."""
+
+    def __init__(self, address: tuple[str, int], compiled: list, ticks: int):
+        self.compiled = compiled
+        self.page = page_html().encode("utf-8")
+        self.meta = json.dumps(_requirements_json(compiled, ticks)).encode("utf-8")
+        super().__init__(address, _Handler)
+
+    def own_origins(self) -> tuple[str, str]:
+        """The page's own origins as served: ``http://127.0.0.1:PORT``, ``http://localhost:
+        PORT``."""
+        port = self.server_address[1]
+        return f"http://127.0.0.1:{port}", f"http://localhost:{port}"
+
+    def shutdown_request(self, request: Any) -> None:
+        """Close a connection once answered, reading first (at most :data:`MAX_BODY` bytes
+        more, for at most a second) what the client still sends: a body refused unread
+        would otherwise make the close a reset, which can lose the answer on its way."""
+        try:
+            request.shutdown(socket.SHUT_WR)
+            request.settimeout(1.0)
+            left = MAX_BODY + 65536
+            while left > 0:
+                chunk = request.recv(65536)
+                if not chunk:
+                    break
+                left -= len(chunk)
+        except OSError:
+            pass
+        self.close_request(request)
+
+    def handle_error(self, request: Any, client_address: Any) -> None:
+        """A request that failed past the handler's own answers: a client gone (its
+        connection reset, timed out) is nothing to report; anything else is one line on
+        stderr, never a traceback."""
+        exc = sys.exc_info()[1]
+        if isinstance(exc, (ConnectionError, TimeoutError)):
             return
+        sys.stderr.write(f"fretc ltlsim: a request failed: {type(exc).__name__}: {exc}\n")
 
-        def _send(self, code: int, body: bytes, kind: str) -> None:
-            self.send_response(code)
-            self.send_header("Content-Type", kind)
-            self.send_header("Content-Length", str(len(body)))
-            self.send_header("Cache-Control", "no-store")
-            self.send_header("Content-Security-Policy", "default-src 'self'; "
-                             "script-src 'unsafe-inline'; style-src 'unsafe-inline'")
-            self.end_headers()
+
+class _Refused(Exception):
+    """A request answered with the 4xx ``status`` and the JSON ``{"error": message}``."""
+
+    def __init__(self, status: int, message: str, headers: tuple[tuple[str, str], ...] = ()):
+        super().__init__(message)
+        self.status, self.message, self.headers = status, message, headers
+
+
+#: the hosts a request may name (the server listens on 127.0.0.1 only)
+_HOSTS = ("127.0.0.1", "localhost")
+
+
+class _Handler(BaseHTTPRequestHandler):
+    """One request: ``GET /`` (the page), ``GET /api/requirements``, ``POST /api/judge``;
+    anything else, or a request of another host or origin, a 4xx with a JSON error."""
+
+    server: _Server
+    server_version = "fretc-ltlsim"
+    timeout = 10  # seconds a read or write on the connection may wait (a client stalled)
+
+    def log_message(self, format: str, *args: Any) -> None:  # noqa: A002 - quiet
+        return
+
+    def _send(self, code: int, body: bytes, kind: str,
+              headers: tuple[tuple[str, str], ...] = ()) -> None:
+        self.send_response(code)
+        self.send_header("Content-Type", kind)
+        self.send_header("Content-Length", str(len(body)))
+        self.send_header("Cache-Control", "no-store")
+        self.send_header("X-Content-Type-Options", "nosniff")
+        self.send_header("Referrer-Policy", "same-origin")
+        self.send_header("Content-Security-Policy", "default-src 'self'; "
+                         "script-src 'unsafe-inline'; style-src 'unsafe-inline'; "
+                         "frame-ancestors 'none'; form-action 'none'; base-uri 'none'")
+        for name, value in headers:
+            self.send_header(name, value)
+        self.end_headers()
+        if self.command != "HEAD":
             self.wfile.write(body)
 
-        def _local(self) -> bool:
-            host = (self.headers.get("Host") or "").rsplit(":", 1)[0]
-            if host in ("127.0.0.1", "localhost"):
-                return True
-            self._send(403, b'{"error": "only 127.0.0.1 or localhost"}', "application/json")
+    def _json(self, code: int, value: Any, headers: tuple[tuple[str, str], ...] = ()) -> None:
+        self._send(code, json.dumps(value).encode("utf-8"), "application/json", headers)
+
+    def send_error(self, code: int, message: str | None = None,
+                   explain: str | None = None) -> None:
+        """http.server's own refusals (a request line or headers it cannot read, a method
+        with no handler) as this server's: JSON, and 4xx (a method other than GET and POST
+        405, an HTTP version it does not speak 400)."""
+        extra: tuple[tuple[str, str], ...] = ()
+        if code == HTTPStatus.NOT_IMPLEMENTED:
+            code, extra = HTTPStatus.METHOD_NOT_ALLOWED, (("Allow", "GET, POST"),)
+            message = "only GET and POST are served"
+        elif code >= 500:
+            code = HTTPStatus.BAD_REQUEST
+        if self.request_version == "HTTP/0.9":  # (else no status line would be written)
+            self.request_version = "HTTP/1.0"
+        self.close_connection = True
+        self._json(code, {"error": message or HTTPStatus(code).phrase}, extra)
+
+    def parse_request(self) -> bool:
+        """http.server's reading of the request line and headers; an HTTP/0.9 request
+        (no version: its answer would have no status line) is refused."""
+        if not super().parse_request():
             return False
+        if self.request_version == "HTTP/0.9":
+            self.send_error(HTTPStatus.BAD_REQUEST, "HTTP/1.0 or HTTP/1.1 expected")
+            return False
+        return True
 
-        def do_GET(self) -> None:  # noqa: N802 - http.server's name
-            if not self._local():
-                return
+    def do_GET(self) -> None:  # noqa: N802 - http.server's name
+        self._answer(post=False)
+
+    def do_POST(self) -> None:  # noqa: N802 - http.server's name
+        self._answer(post=True)
+
+    def _answer(self, post: bool) -> None:
+        try:
+            _check_host(self.headers.get_all("Host") or [], self.server.server_address[1])
+            _check_origin(self.headers, self.server.own_origins(), post)
             path = self.path.split("?", 1)[0]
-            if path in ("/", "/index.html"):
-                self._send(200, page, "text/html; charset=utf-8")
-            elif path == "/api/requirements":
-                self._send(200, meta, "application/json")
+            if post and path == "/api/judge":
+                trace = _read_json(self.headers, self.rfile)
+                with np.errstate(all="ignore"):
+                    answer = judge_trace(self.server.compiled, trace)
+                self._send(200, json.dumps(answer).encode("utf-8"), "application/json")
+            elif not post and path in ("/", "/index.html"):
+                self._send(200, self.server.page, "text/html; charset=utf-8")
+            elif not post and path == "/api/requirements":
+                self._send(200, self.server.meta, "application/json")
             else:
-                self._send(404, b'{"error": "not found"}', "application/json")
+                raise _Refused(404, "not found")
+        except _Refused as r:
+            self.close_connection = True
+            self._json(r.status, {"error": r.message}, r.headers)
+        except TraceError as exc:
+            self._json(400, {"error": str(exc)})
+        except (ConnectionError, TimeoutError):
+            raise  # (the client is gone: nothing to answer)
+        except Exception as exc:  # a fault of fretc's, not of the request: said, not hidden
+            sys.stderr.write(f"fretc ltlsim: internal error on {self.command} {self.path[:80]}"
+                             f": {type(exc).__name__}: {exc}\n")
+            self._json(500, {"error": f"internal error: {type(exc).__name__}: {exc}"})
 
-        def do_POST(self) -> None:  # noqa: N802 - http.server's name
-            if not self._local():
-                return
-            if self.path != "/api/judge":
-                self._send(404, b'{"error": "not found"}', "application/json")
-                return
-            size = int(self.headers.get("Content-Length") or 0)
-            if not 0 < size <= MAX_BODY:
-                self._send(413, json.dumps({"error": f"a body of 1 to {MAX_BODY} bytes "
-                                            "expected"}).encode(), "application/json")
-                return
-            try:
-                answer = judge_trace(compiled, json.loads(self.rfile.read(size)))
-            except (TraceError, ValueError) as exc:
-                self._send(400, json.dumps({"error": str(exc)}).encode(), "application/json")
-                return
-            self._send(200, json.dumps(answer).encode("utf-8"), "application/json")
 
-    return ThreadingHTTPServer(("127.0.0.1", port), Handler)
+def _check_host(hosts: list[str], port: int) -> None:
+    """Raise :class:`_Refused` (403) unless the request names one ``Host``, 127.0.0.1 or
+    localhost (with no port or ``port``): a page of another site reaching the server
+    through DNS rebinding names its own host."""
+    if len(hosts) == 1:
+        host, _, given = hosts[0].strip().lower().partition(":")
+        if host in _HOSTS and given in ("", str(port)):
+            return
+    raise _Refused(403, "only 127.0.0.1 or localhost")
+
+
+def _origin(value: str) -> str | None:
+    """The origin ``scheme://host:port`` of an ``Origin`` header's value or a ``Referer``
+    URL (port 80 when an http URL gives none); None when it has none (``null``, not a
+    URL)."""
+    try:
+        parts = urlsplit(value.strip())
+        port = parts.port
+    except ValueError:
+        return None
+    if parts.scheme.lower() != "http" or not parts.hostname:
+        return None
+    return f"http://{parts.hostname.lower()}:{port if port is not None else 80}"
+
+
+def _check_origin(headers: Any, own: tuple[str, ...], post: bool) -> None:
+    """Raise :class:`_Refused` (403) for a request of another origin: the ``Origin`` header
+    judged when present (one, naming one of ``own``), else the ``Referer``'s origin; a POST
+    must carry one of them (browsers send ``Origin`` with every POST, same-origin fetches
+    included: the Fetch standard, "append a request Origin header")."""
+    for name in ("Origin", "Referer"):
+        given = headers.get_all(name) or []
+        if not given:
+            continue
+        if len(given) == 1 and _origin(given[0]) in own:
+            return
+        raise _Refused(403, f"a request of another origin ({name}): only the page's own, "
+                            f"{' or '.join(own)}")
+    if post:
+        raise _Refused(403, "a POST must carry an Origin (or Referer) header naming the "
+                            f"page's own origin, {' or '.join(own)}")
+
+
+#: JSON media types a POST may declare (RFC 8259 section 11; parameters such as charset
+#: are read past)
+_JSON_TYPES = ("application/json",)
+
+
+def _read_json(headers: Any, rfile: Any) -> Any:
+    """The JSON body of a POST; :class:`_Refused` when it cannot be read: 411 without a
+    ``Content-Length`` (or with a ``Transfer-Encoding``, not read here), 400 for a length
+    that is not one byte count, a body shorter than it, not UTF-8 or not JSON (nested past
+    the reader's recursion limit included), 413 for one over :data:`MAX_BODY`, 415 for a
+    ``Content-Type`` other than JSON."""
+    if headers.get_all("Transfer-Encoding"):
+        raise _Refused(411, "a body with a Transfer-Encoding is not read: send a "
+                            "Content-Length")
+    lengths = [x.strip() for x in headers.get_all("Content-Length") or []]
+    if not lengths:
+        raise _Refused(411, "a Content-Length is required")
+    if len(set(lengths)) != 1 or not re.fullmatch(r"[0-9]{1,15}", lengths[0]):
+        raise _Refused(400, f"Content-Length: one byte count expected, got "
+                            f"{', '.join(lengths)[:40]!r}")
+    size = int(lengths[0])
+    if not 0 < size <= MAX_BODY:
+        raise _Refused(413 if size else 400, f"a body of 1 to {MAX_BODY} bytes expected, "
+                                             f"Content-Length says {size}")
+    media = (headers.get("Content-Type") or "").split(";", 1)[0].strip().lower()
+    if media not in _JSON_TYPES:
+        raise _Refused(415, f"Content-Type: application/json expected, got {media[:40]!r}")
+    raw = rfile.read(size)
+    if len(raw) < size:
+        raise _Refused(400, f"the body ended after {len(raw)} of the {size} bytes its "
+                            "Content-Length says")
+    try:
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise _Refused(400, f"the body is not UTF-8 (byte {exc.start})") from None
+    try:
+        return json.loads(text)
+    except RecursionError:
+        raise _Refused(400, "the body is not JSON: nested too deeply") from None
+    except ValueError as exc:
+        raise _Refused(400, f"the body is not JSON: {exc}") from None
