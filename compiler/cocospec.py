@@ -7,7 +7,13 @@ the contract ``<component>Spec`` whose inputs and outputs are the component's In
 Output variables (types from the glossary: ``boolean`` -> ``bool``, integers -> ``int``,
 ``single``/``double`` -> ``real``), its Internal variables as ``var NAME: TYPE = DEF;``, and
 one ``guarantee "ID" EXPR;`` per requirement (``assume`` when the id says ``assumption``),
-EXPR being the requirement's pt formula in Lustre. fretc writes the same, from its pt formula
+EXPR being the requirement's pt formula in Lustre. FRET writes DEF, the glossary's
+``assignment``, as it is; fretc writes it as it reads it, printed back from FRET's Lustre
+subset with every name renamed as in the signature, and leaves out (with the reason, the
+variable then an input) a definition outside the subset
+(:mod:`fretc.compiler.cocospec_definitions`): no text of the glossary reaches the file as
+code. ID is folded to one line with ``\\`` and ``"`` escaped; ids and texts in comments are
+one line with no ``*)``. fretc writes the same, from its pt formula
 IR (never from printed text), as a Kind 2 contract node (Kind 2's documentation, "Contracts":
 ``contract NAME(INPUTS) returns (OUTPUTS); let ... tel``), which a node takes with
 ``(*@contract import NAME(...) returns (...); *)``.
@@ -61,7 +67,8 @@ class CocospecUnsupported(ValueError):
     """A pt formula Lustre (or Kind 2's typing) cannot say; the message names what."""
 
 
-#: Kind 2's keywords (its Lustre lexer's), which no variable may be named (renamed ``NAME_v``)
+#: Kind 2's keywords (its Lustre lexer's, ``lsh`` and ``rsh`` included), which no variable
+#: may be named (renamed ``NAME_v``)
 LUSTRE_KEYWORDS = frozenset("""
     type datatype int uint sint real bool subrange of subtype struct enum history map set
     const param transparent opaque imported rec lemma node function returns var let tel con
@@ -69,7 +76,7 @@ LUSTRE_KEYWORDS = frozenset("""
     not and xor forall exists or in if then else elsif fi when cond otherwise auto end frame
     div mod any choose current condact activate initial default every restart merge pre fby
     last mode assume guarantee require ensure weakly assumption_vars decreases with match
-    int8 int16 int32 int64 uint8 uint16 uint32 uint64
+    int8 int16 int32 int64 uint8 uint16 uint32 uint64 lsh rsh
 """.split())
 
 #: FRET's operator nodes as fretc writes them: name -> (the nodes it calls, its Lustre text).
@@ -376,10 +383,12 @@ def _delay_nodes(delays: list[int]) -> str:
 @dataclass
 class Contract:
     """One component's contract: ``name`` (``<component>Spec``), ``inputs`` and ``outputs``
-    (``[(Lustre name, type)]``), ``internals`` (``[(name, type, Lustre definition)]``),
-    ``guarantees`` (``[(requirement id, text, Lustre expression, assume?)]``), ``used`` (the
-    library nodes called), ``notes`` (comment lines), ``skipped``
-    (``[(requirement id, why)]``)."""
+    (``[(Lustre name, type)]``), ``internals`` (``[(name, type, Lustre definition)]``, each
+    definition as :mod:`fretc.compiler.cocospec_definitions` re-prints it), ``guarantees``
+    (``[(requirement id, text, Lustre expression, assume?)]``), ``used`` (the library nodes
+    called), ``notes`` (comment lines), ``skipped`` (``[(requirement id, why)]``),
+    ``left_out`` (``[(variable, why)]``: definitions not written), ``names`` (each FRET
+    variable's Lustre name: :meth:`lustre_name`)."""
 
     component: str
     name: str
@@ -390,6 +399,19 @@ class Contract:
     used: set[str] = field(default_factory=set)
     notes: list[str] = field(default_factory=list)
     skipped: list[tuple[str, str]] = field(default_factory=list)
+    left_out: list[tuple[str, str]] = field(default_factory=list)
+    names: dict[str, str] = field(default_factory=dict)
+    taken: set[str] = field(default_factory=set)
+
+    def lustre_name(self, name: str) -> str:
+        """The Lustre name of the FRET variable ``name`` in this contract, the same
+        wherever the file writes it (signature, ghosts, guarantees; Ogma's names): FRET's
+        mangling, ``_v`` after a Kind 2 keyword or a library node's name, ``_2``, ``_3`` ...
+        after a name already taken. Named on first use."""
+        got = self.names.get(name)
+        if got is None:
+            got = self.names[name] = _lustre_name(name, self.taken)
+        return got
 
 
 def contracts(compiled: Sequence[Compiled]) -> list[Contract]:
@@ -445,8 +467,15 @@ def used_types(items: Sequence[Compiled], types: dict[str, str]) -> None:
 
 
 def _lustre_name(name: str, taken: set[str]) -> str:
+    """A Lustre name for the FRET variable ``name`` not in ``taken`` (added to it): FRET's
+    mangling; ``v_`` before a name starting with ``then`` or ``else`` (Kind 2's lexer reads
+    ``and then...`` and ``or else...`` as its short-circuit operators, whatever follows);
+    ``_v`` after a keyword (:data:`LUSTRE_KEYWORDS`) or a library node's name; then ``_2``,
+    ``_3`` ... until it is free."""
     base = mangle(name)
-    if base in LUSTRE_KEYWORDS or base in LIBRARY or re.fullmatch(r"delay[0-9]*", base):
+    if base.startswith(("then", "else")):
+        base = "v_" + base
+    elif base in LUSTRE_KEYWORDS or base in LIBRARY or re.fullmatch(r"delay[0-9]*", base):
         base += "_v"
     out, k = base, 2
     while out in taken:
@@ -458,79 +487,70 @@ def _lustre_name(name: str, taken: set[str]) -> str:
 def _contract(comp: str, items) -> Contract:
     out = Contract(comp, _lustre_name(comp + "Spec", set()))
     types, fret, inputs, outputs = declared_variables(items)
-    taken: set[str] = {out.name}
-    names: dict[str, str] = {}
+    out.taken.add(out.name)
     used_types(items, types)
     for name in inputs + outputs:
-        names[name] = _lustre_name(name, taken)
+        out.lustre_name(name)
     for c in items:
         f = c.formalization
         if f is None or c.error is not None:
             why = "free-form" if c.freeform else "not formalized"
             out.skipped.append((c.id, why))
             continue
-        own = {v: _lustre_name(v, set(taken)) for v in ir.variables(f.pt) if v not in names}
+        trial = set(out.taken)  # (a requirement left out names nothing)
+        own = {v: _lustre_name(v, trial) for v in ir.variables(f.pt) if v not in out.names}
         used: set[str] = set()
         try:
-            expr = lustre(f.pt, {**names, **own}, types, used)
+            lustre(f.pt, {**out.names, **own}, types, used)
         except CocospecUnsupported as exc:
             out.skipped.append((c.id, str(exc)))
             continue
         for v in own:
-            names[v] = _lustre_name(v, taken)
-        expr = lustre(f.pt, names, types, used)
+            out.lustre_name(v)
+        expr = lustre(f.pt, out.names, types, used)
         out.used |= used
         out.guarantees.append((c.id, c.text, expr, "assumption" in c.id.lower()))
-    _signature(out, names, types, fret, inputs, outputs)
+    _signature(out, types, fret, inputs, outputs)
     return out
 
 
-def _signature(out: Contract, names, types, fret, inputs, outputs) -> None:
+def _signature(out: Contract, types, fret, inputs, outputs) -> None:
     """Inputs, outputs and Internal variables of ``out``: the declared ones, every Internal
-    variable of the glossary with a definition (as FRET's export, those a definition reads
-    first), then each variable a guarantee reads that is declared neither way, as an input
-    (with a note)."""
-    out.outputs = [(names[n], types.get(n, "bool")) for n in outputs]
-    out.inputs = [(names[n], types.get(n, "bool")) for n in inputs]
-    defined = {name: v.assignment.strip().rstrip(";") for name, v in fret.items()
-               if getattr(v, "kind", "") == "Internal" and v.assignment.strip()
-               and name not in inputs and name not in outputs}
-    taken = {n for n, _t in out.inputs + out.outputs}
-    for name in _definition_order(defined):
-        lname = names.get(name) or _lustre_name(name, taken)
-        out.internals.append((lname, types.get(name, "bool"), defined[name]))
-    for name, lname in names.items():
+    variable of the glossary with a definition fretc reads (as FRET's export, those a
+    definition reads first; :func:`fretc.compiler.cocospec_definitions.ghost_definitions`,
+    the others left out with the reason), then each variable a guarantee or a definition
+    reads that is declared neither way nor defined, as an input (with a note)."""
+    from fretc.compiler.cocospec_definitions import ghost_definitions
+
+    out.outputs = [(out.names[n], types.get(n, "bool")) for n in outputs]
+    out.inputs = [(out.names[n], types.get(n, "bool")) for n in inputs]
+    internal = [v for name, v in fret.items()
+                if getattr(v, "kind", "") == "Internal" and v.assignment.strip()
+                and name not in inputs and name not in outputs]
+    ghosts = ghost_definitions(internal, types, out.lustre_name)
+    out.internals = [(g.lustre, g.type, g.text) for g in ghosts.written]
+    out.used |= ghosts.used
+    defined = {g.name for g in ghosts.written}
+    out.left_out = ghosts.left_out
+    for name, lname in list(out.names.items()):
         if name in inputs or name in outputs or name in defined:
             continue
         kind = getattr(fret.get(name), "kind", "")
         out.inputs.append((lname, types.get(name, "bool")))
         what = f"a FRET {kind} variable" if kind else "declared neither input nor output"
-        out.notes.append(f"{one_line(name)}: {what}; read as an input")
-
-
-def _definition_order(defined: dict[str, str]) -> list[str]:
-    """The names of ``defined`` (name -> Lustre definition) with each after the names its
-    definition reads, otherwise in the glossary's order."""
-    order: list[str] = []
-    state: dict[str, int] = {}
-
-    def visit(name: str) -> None:
-        if state.get(name):
-            return  # done, or on the way (a cycle: left to Kind 2 to report)
-        state[name] = 1
-        for word in re.findall(r"[A-Za-z_][A-Za-z0-9_]*", defined[name]):
-            if word in defined and word != name:
-                visit(word)
-        order.append(name)
-        state[name] = 2
-
-    for name in defined:
-        visit(name)
-    return order
+        here = "" if lname == name else f" ({lname} here)"
+        out.notes.append(f"{one_line(name)}{here}: {what}; read as an input")
 
 
 def _comment(text: str) -> str:
     return one_line(text).replace("*)", "* )")
+
+
+def _label(rid: str) -> str:
+    """The text of a property's string label showing the requirement id ``rid``: one line
+    (:func:`fretc.common.textsafe.one_line`, as every target folds ids), ``\\`` and ``"``
+    escaped (Kind 2's lexer reads ``\\c`` as ``c``), so no content closes the string."""
+    return one_line(rid).replace("\\", "\\\\").replace('"', '\\"')
 
 
 def _render(c: Contract, source: str) -> str:
@@ -540,6 +560,8 @@ def _render(c: Contract, source: str) -> str:
              f"-- Use it from a node: (*@contract import {c.name}(...) returns (...); *)"]
     lines += [f"-- note: {_comment(n)}" for n in c.notes]
     lines += [f"-- not here: {_comment(rid)}: {_comment(why)}" for rid, why in c.skipped]
+    lines += [f"-- not defined here: {_comment(name)}: {_comment(why)}"
+              for name, why in c.left_out]
     if not c.guarantees and not c.internals:  # (Kind 2: a contract holds at least one item)
         lines.append(f"-- no contract: none of {_comment(c.component)}'s requirements could "
                      "be written")
@@ -553,7 +575,7 @@ def _render(c: Contract, source: str) -> str:
     for name, t, definition in c.internals:
         lines.append(f"  var {name}: {t} = {definition};")
     for rid, text, expr, assume in c.guarantees:
-        label = rid.replace("\\", "\\\\").replace('"', '\\"')
+        label = _label(rid)
         lines.append(f"  (* {_comment(rid)}: {_comment(text)} *)")
         lines.append(f"  {'assume' if assume else 'guarantee'} \"{label}\" {expr};")
     lines.append("tel")
@@ -561,13 +583,16 @@ def _render(c: Contract, source: str) -> str:
 
 
 def emit_cocospec(compiled: Sequence[Compiled]) -> tuple[dict[str, str],
-                                                         list[tuple[str, str, str]]]:
+                                                         list[tuple[str, str, str]],
+                                                         list[str]]:
     """The CoCoSpec files of ``compiled`` (``compiler.build.Compiled`` list): ``({file stem:
-    Lustre text}, [(stem, requirement id, why it is left out)])``, one file per component
-    (stem ``-`` for a free-form requirement, in none),
-    stem ``<component>Spec`` as FRET names it (written as ``STEM.lus``). Same input, same
-    bytes."""
+    Lustre text}, [(stem, requirement id, why it is left out)], [notes])``, one file per
+    component (stem ``-`` for a free-form requirement, in none), stem ``<component>Spec`` as
+    FRET names it (written as ``STEM.lus``); the notes (``STEM: ...``, also comments of the
+    file) name the definitions left out (with the reason) and the variables read as inputs
+    that are not declared so. Same input, same bytes."""
     out: dict[str, str] = {}
+    notes: list[str] = []
     skipped = [("-", c.id, "free-form: no formula, no component") for c in compiled
                if c.freeform]
     for c in contracts(compiled):
@@ -575,4 +600,7 @@ def emit_cocospec(compiled: Sequence[Compiled]) -> tuple[dict[str, str],
                                 if component_of(x) == c.component)
         out[c.name] = _render(c, ", ".join(sources) or "(no file)")
         skipped += [(c.name, rid, why) for rid, why in c.skipped]
-    return out, skipped
+        notes += [f"{c.name}: {one_line(name)} is not defined in the contract: {why}"
+                  for name, why in c.left_out]
+        notes += [f"{c.name}: {note}" for note in c.notes]
+    return out, skipped, notes

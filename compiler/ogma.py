@@ -20,7 +20,10 @@ Ogma reads ``ptLTL`` by default (``--prop-format smv``; FRET puts its pt formula
 :mod:`fretc.compiler.cocospec`. Every variable a requirement reads is an entry of
 ``Other_variables`` (the component's declared Inputs and Outputs first, types from the
 glossary, else from their use): fretc has no Copilot definition of an Internal variable, so
-none is written as one, and the monitor reads it as an input (said on stderr). Left out,
+none is written as one, and the monitor reads it as an input (said on stderr). Every name
+is the CoCoSpec contract's (:meth:`fretc.compiler.cocospec.Contract.lustre_name`: a Lustre
+keyword renamed, ``node`` -> ``node_v``), in ``Other_variables``, ``ptLTL`` and
+``CoCoSpecCode`` alike, and a requirement's ``name`` is its id on one line. Left out,
 with the reason: a requirement that did not formalize, a pt formula that needs the future,
 and one using what Ogma's SMV grammar has no form for (functions, ``mod``, ``^``, unary
 minus, an if-then-else of numbers, a number in exponent notation, a name that does not
@@ -34,10 +37,12 @@ import re
 from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
+from fretc.common.textsafe import one_line
 from fretc.compiler import ir
-from fretc.compiler.cocospec import component_of, contracts, declared_variables, used_types
+from fretc.compiler.cocospec import (Contract, component_of, contracts, declared_variables,
+                                     used_types)
 from fretc.compiler.ir import name_of
-from fretc.compiler.printers import mangle
+from fretc.compiler.printers import mangle, to_smv
 
 if TYPE_CHECKING:
     from fretc.compiler.build import Compiled
@@ -75,10 +80,12 @@ def emit_ogma(compiled: Sequence[Compiled]) -> tuple[dict[str, str],
     ``({file stem: JSON text}, [(stem, requirement id, why left out)], [notes])``, one file
     per component, stem ``<component>Spec`` as FRET names it (written as ``STEM.json``);
     the notes name the variables written as inputs that the glossary declares otherwise.
-    Same input, same bytes."""
+    Every name is the contract's Lustre name (:meth:`fretc.compiler.cocospec.Contract.
+    lustre_name`): ``Other_variables``, ``ptLTL`` and ``CoCoSpecCode`` read the same names
+    (``node`` is ``node_v`` in all three). Same input, same bytes."""
     out: dict[str, str] = {}
     skipped: list[tuple[str, str, str]] = []
-    notes: list[str] = [f"{c.id}: free-form, no formula and no component: left out"
+    notes: list[str] = [f"{one_line(c.id)}: free-form, no formula and no component: left out"
                         for c in compiled if c.freeform]
     for contract in contracts(compiled):
         items = [c for c in compiled if c.requirement is not None and not c.freeform
@@ -102,18 +109,42 @@ def emit_ogma(compiled: Sequence[Compiled]) -> tuple[dict[str, str],
             for x in ir.walk(f.pt):
                 if x.op in ("ap", "var") and variables.get(name_of(x)) is None:
                     variables[name_of(x)] = types[name_of(x)]
-            reqs.append({"name": c.id, "fretish": c.text, "ptLTL": c.smv_text["pt"],
+            reqs.append({"name": one_line(c.id), "fretish": c.text, "ptLTL": _pt_text(c, contract),
                          "CoCoSpecCode": lustre_of.get(c.id, ""), "PCTL": ""})
         for name in variables:
             kind = getattr(fret.get(name), "kind", "")
             if name not in inputs and name not in outputs and kind not in ("", "Input",
                                                                            "Output"):
-                notes.append(f"{contract.name}: {name} (a FRET {kind} variable) is an "
-                             "Other_variables entry: the monitor reads it as an input")
+                notes.append(f"{contract.name}: {one_line(name)} (a FRET {kind} variable) is "
+                             "an Other_variables entry: the monitor reads it as an input")
         spec = {"Internal_variables": [],
-                "Other_variables": [{"name": mangle(n), "type": t or "bool"}
+                "Other_variables": [{"name": contract.lustre_name(n), "type": t or "bool"}
                                     for n, t in variables.items()],
                 "Functions": [], "Requirements": reqs}
         out[contract.name] = json.dumps({contract.name: spec}, indent=2) + "\n"
     return out, skipped, notes
 
+
+def _pt_text(c: Compiled, contract: Contract) -> str:
+    """The requirement's pt formula as FRET prints it (``(Z FALSE)`` for FTP), its variables
+    by their names in ``contract``: the text ``--emit ltl`` prints when no name is renamed."""
+    f = c.formalization
+    assert f is not None  # (a formalized requirement)
+    names = {v: contract.lustre_name(v) for v in ir.variables(f.pt)}
+    if all(mangle(v) == lustre for v, lustre in names.items()):
+        return c.smv_text["pt"]
+    memo: dict[int, ir.Node] = {}
+
+    def go(n: ir.Node) -> ir.Node:
+        got = memo.get(id(n))
+        if got is None:
+            if n.op in ("ap", "var"):
+                got = ir.Node(n.op, (), names[name_of(n)])
+            elif n.args:
+                got = ir.Node(n.op, tuple(go(a) for a in n.args), n.name, n.lo, n.hi)
+            else:
+                got = n
+            memo[id(n)] = got
+        return got
+
+    return to_smv(go(f.pt), "(Z FALSE)")

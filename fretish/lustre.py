@@ -27,18 +27,29 @@ operator and ``true``/``false`` are boolean; a name is what
 the glossary's ``dataType`` says (``boolean``, else a number); ``ite``, ``->`` and ``pre``
 take their operands'. ``div``, ``when``, ``current``, ``fby`` and the rest of Lustre are
 refused (:class:`LustreError`), so a definition fretc cannot read stays a free variable and
-the notes say so.
+the notes say so; so is a Lustre comment (``--``, ``(*``, ``/*``, ``//``: the text is one
+expression, and ``a --b`` is ``a`` to Lustre, not ``a - (-b)``) and a number of more than
+:data:`fretc.fretish.limits.MAX_NUMBER_CHARS` characters.
+
+:func:`print_definition` writes a definition back as Lustre, from the same reading: fully
+parenthesized, each variable renamed as its caller names it, numbers in Kind 2's forms; the
+exports that write definitions into Lustre (``--emit cocospec``, ``--emit ogma``) write only
+that text, never the assignment as it came (a ``;``, a comment or a keyword in it would
+change the file's structure).
 """
 
 from __future__ import annotations
 
 import re
 from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
 
 from fretc.fretish import ast as A
-from fretc.fretish.limits import MAX_EXPR_DEPTH, depth
+from fretc.fretish.limits import MAX_EXPR_DEPTH, MAX_NUMBER_CHARS, depth
 
-__all__ = ["LustreError", "LustreTooDeep", "parse_definition", "pre_groups"]
+__all__ = ["LustreError", "LustreTooDeep", "PrintedDefinition", "lustre_number",
+           "parse_definition", "pre_groups", "print_definition"]
 
 _TOKEN = re.compile(r"\s*(?:(?P<num>(?:[0-9]+(?:\.[0-9]*)?|\.[0-9]+)(?:[eE][-+]?[0-9]+)?)"
                     r"|(?P<name>[A-Za-z_][A-Za-z0-9_]*)"
@@ -47,6 +58,11 @@ _KEYWORDS = frozenset({"and", "or", "xor", "not", "if", "then", "else", "pre", "
                        "false", "mod"})
 _REFUSED = frozenset({"div", "when", "current", "fby", "merge", "let", "tel", "node"})
 _COMPARISONS = {"=": "=", "<>": "!=", "<": "<", "<=": "<=", ">": ">", ">=": ">="}
+#: Lustre's comment openers: none is an operator of the subset (``--`` is not two minuses)
+_COMMENT = re.compile(r"--|\(\*|/\*|//")
+#: the subset's binary operators (Lustre's spelling) as FRETish writes them
+_FRETISH_OP = {"=>": "->", "or": "|", "xor": "xor", "and": "&", "+": "+", "-": "-",
+               "*": "*", "/": "/", "mod": "mod", **_COMPARISONS}
 
 
 class LustreError(ValueError):
@@ -154,7 +170,8 @@ def pre_groups(text: str, name: str, taken: Callable[[str], bool],
 
 def _tokens(text: str) -> list[tuple[str, int]]:
     """``(token, offset)`` of ``text``. Raises :class:`LustreError` at a character no token
-    starts with."""
+    starts with, at a Lustre comment opener and at a number longer than
+    :data:`fretc.fretish.limits.MAX_NUMBER_CHARS` characters."""
     out: list[tuple[str, int]] = []
     i = 0
     while True:
@@ -162,20 +179,158 @@ def _tokens(text: str) -> list[tuple[str, int]]:
             i += 1
         if i == len(text):
             return out
+        if _COMMENT.match(text, i):
+            raise LustreError(f"a Lustre comment ({text[i:i + 2]!r}, character {i}) is "
+                              "outside FRET's Lustre subset (a definition is one expression)")
         m = _TOKEN.match(text, i)
         if m is None or m.end() == i:
             raise LustreError(f"unexpected {text[i]!r} at character {i}")
         tok = m.group("num") or m.group("name") or m.group("op")
+        if m.group("num") and len(tok) > MAX_NUMBER_CHARS:
+            raise LustreError(f"a number of {len(tok)} characters at character {i} (at most "
+                              f"{MAX_NUMBER_CHARS})")
         out.append((tok, i))
         i = m.end()
 
 
+class _Fretish:
+    """What :class:`_Parser` builds for fretc's reading: :mod:`fretc.fretish.ast` expressions
+    (the module docstring's meaning of each construct)."""
+
+    def ite(self, c: A.Expr, a: A.Expr, b: A.Expr) -> A.Expr:
+        return A.Call("ite", (c, a, b))
+
+    def arrow(self, a: A.Expr, b: A.Expr) -> A.Expr:
+        return A.Call("ite", (A.Var("FTP"), a, b))
+
+    def binary(self, op: str, a: A.Expr, b: A.Expr, booleans: bool) -> A.Expr:
+        if booleans and op in ("=", "<>"):  # (truth values: Lustre's = is iff)
+            return A.Binary("<->" if op == "=" else "xor", a, b)
+        return A.Binary(_FRETISH_OP[op], a, b)
+
+    def not_(self, a: A.Expr) -> A.Expr:
+        return A.Unary("!", a)
+
+    def neg(self, a: A.Expr) -> A.Expr:
+        if isinstance(a, A.NumLit) and not a.text.startswith("-"):
+            return A.NumLit("-" + a.text)
+        return A.Unary("-", a)
+
+    def pre(self, a: A.Expr, boolean: bool) -> A.Expr:
+        if boolean:
+            return A.Call("preBool", (A.BoolLit(False), a))
+        return A.Call("preReal", (A.NumLit("0"), a))
+
+    def literal(self, tok: str) -> A.Expr:
+        if tok in ("true", "false"):
+            return A.BoolLit(tok == "true")
+        return A.NumLit(tok)
+
+    def var(self, name: str) -> A.Expr:
+        return A.Var(name)
+
+    def call(self, name: str, args: list[A.Expr]) -> A.Expr:
+        return A.Call(name, tuple(args))
+
+
+class _Lustre:
+    """What :class:`_Parser` builds for :func:`print_definition`: the Lustre text of each
+    construct, parenthesized (so Kind 2's precedences, which differ from the subset's in
+    places, read it as fretc does), each variable as ``rename`` names it."""
+
+    def __init__(self, rename: Callable[[str], str]):
+        self.rename = rename
+        self.names: dict[str, None] = {}
+        self.calls: dict[tuple[str, int], None] = {}
+
+    def ite(self, c: str, a: str, b: str) -> str:
+        return f"(if {c} then {a} else {b})"
+
+    def arrow(self, a: str, b: str) -> str:
+        return f"({a} -> {b})"
+
+    def binary(self, op: str, a: str, b: str, booleans: bool) -> str:
+        return f"({a} {op} {b})"
+
+    def not_(self, a: str) -> str:
+        return f"(not {a})"
+
+    def neg(self, a: str) -> str:
+        return f"(- {a})"  # (spaced: never "--", a comment)
+
+    def pre(self, a: str, boolean: bool) -> str:
+        return f"(pre {a})"
+
+    def literal(self, tok: str) -> str:
+        return tok if tok in ("true", "false") else lustre_number(tok)
+
+    def var(self, name: str) -> str:
+        if name == "FTP":  # (fretc reads FTP as FRET's first time point, as in ->)
+            return "(true -> false)"
+        self.names.setdefault(name)
+        return self.rename(name)
+
+    def call(self, name: str, args: list[str]) -> str:
+        self.calls.setdefault((name, len(args)))
+        return f"{name}({', '.join(args)})"
+
+
+def lustre_number(tok: str) -> str:
+    """The number token ``tok`` of the subset (``7``, ``1.``, ``.5``, ``2e3``) in Kind 2's
+    form (its lexer: an integer, or digits, ``.``, digits and an exponent): ``7``, ``1.0``,
+    ``0.5``, ``2.0e3``."""
+    mantissa, e, exponent = tok.replace("E", "e").partition("e")
+    if not e and "." not in mantissa:
+        return mantissa
+    whole, _dot, fraction = mantissa.partition(".")
+    return f"{whole or '0'}.{fraction or '0'}" + (f"e{exponent}" if e else "")
+
+
+@dataclass(frozen=True)
+class PrintedDefinition:
+    """A definition as :func:`print_definition` writes it: ``text`` (Lustre, one line),
+    ``boolean`` (its type is bool), ``names`` (the variables it reads, source names, in order
+    of first appearance; ``FTP`` not among them) and ``calls`` (``(function, number of
+    arguments)`` it calls, in order)."""
+
+    text: str
+    boolean: bool
+    names: tuple[str, ...]
+    calls: tuple[tuple[str, int], ...]
+
+
+def print_definition(text: str, is_boolean: Callable[[str], bool],
+                     rename: Callable[[str], str] = str) -> PrintedDefinition:
+    """The Lustre definition ``text`` written back as Lustre from fretc's reading of it
+    (:func:`parse_definition`, the same subset and meaning): each operation parenthesized,
+    each variable ``rename(name)`` (the caller's Lustre names: keywords and clashes renamed),
+    ``FTP`` as ``(true -> false)``, numbers by :func:`lustre_number`, function calls by
+    their name. The text holds only the subset's tokens, so no ``;``, comment, string or
+    keyword of the input reaches the output.
+
+    Raises:
+        LustreError: as :func:`parse_definition` (outside the subset, a comment, trailing
+            text); LustreTooDeep when nested past what it reads."""
+    parse_definition(text, is_boolean)  # (what fretc reads, its limits included)
+    build = _Lustre(rename)
+    p = _Parser(_tokens(text), is_boolean, build)
+    try:
+        out, boolean = p.ite()
+    except RecursionError:
+        raise LustreTooDeep("nested too deeply") from None
+    return PrintedDefinition(out, boolean, tuple(build.names), tuple(build.calls))
+
+
 class _Parser:
     """Recursive descent over the tokens, one method per precedence level (lowest first);
-    each returns ``(expression, is_boolean)``, the public :meth:`expr` the expression."""
+    each returns ``(what the builder made, is_boolean)``, the public :meth:`expr` the
+    expression. The builder (:class:`_Fretish`, the default, or :class:`_Lustre`) makes
+    each construct."""
 
-    def __init__(self, tokens: list[tuple[str, int]], is_boolean: Callable[[str], bool]):
+    def __init__(self, tokens: list[tuple[str, int]], is_boolean: Callable[[str], bool],
+                 build: Any = None):
         self.tokens, self.k, self.is_boolean = tokens, 0, is_boolean
+        self.build = _Fretish() if build is None else build
 
     def peek(self) -> str | None:
         return self.tokens[self.k][0] if self.k < len(self.tokens) else None
@@ -192,105 +347,99 @@ class _Parser:
         self.k += 1
         return tok
 
-    def expr(self) -> A.Expr:
+    def expr(self) -> Any:
         return self.ite()[0]
 
-    def ite(self) -> tuple[A.Expr, bool]:
+    def ite(self) -> tuple[Any, bool]:
         """The lowest level; ``if`` itself is read where an operand starts (:meth:`atom`),
         its ``else`` branch extending as far right as it can."""
         return self.arrow()
 
-    def if_then_else(self) -> tuple[A.Expr, bool]:
+    def if_then_else(self) -> tuple[Any, bool]:
         self.take("if")
         c, _ = self.ite()
         self.take("then")
         a, ab = self.ite()
         self.take("else")
         b, bb = self.ite()
-        return A.Call("ite", (c, a, b)), ab and bb
+        return self.build.ite(c, a, b), ab and bb
 
-    def arrow(self) -> tuple[A.Expr, bool]:
+    def arrow(self) -> tuple[Any, bool]:
         a, ab = self.implies()
         if self.peek() != "->":
             return a, ab
         self.take("->")
         b, bb = self.arrow()  # (right associative)
-        return A.Call("ite", (A.Var("FTP"), a, b)), ab and bb
+        return self.build.arrow(a, b), ab and bb
 
-    def implies(self) -> tuple[A.Expr, bool]:
+    def implies(self) -> tuple[Any, bool]:
         a, ab = self.disjunction()
         if self.peek() != "=>":
             return a, ab
         self.take("=>")
         b, _ = self.implies()
-        return A.Binary("->", a, b), True
+        return self.build.binary("=>", a, b, True), True
 
-    def disjunction(self) -> tuple[A.Expr, bool]:
+    def disjunction(self) -> tuple[Any, bool]:
         a, ab = self.conjunction()
         while self.peek() in ("or", "xor"):
-            op = "|" if self.take() == "or" else "xor"
+            op = self.take()
             b, _ = self.conjunction()
-            a, ab = A.Binary(op, a, b), True
+            a, ab = self.build.binary(op, a, b, True), True
         return a, ab
 
-    def conjunction(self) -> tuple[A.Expr, bool]:
+    def conjunction(self) -> tuple[Any, bool]:
         a, ab = self.comparison()
         while self.peek() == "and":
             self.take()
             b, _ = self.comparison()
-            a, ab = A.Binary("&", a, b), True
+            a, ab = self.build.binary("and", a, b, True), True
         return a, ab
 
-    def comparison(self) -> tuple[A.Expr, bool]:
+    def comparison(self) -> tuple[Any, bool]:
         a, ab = self.negation()
         if self.peek() in _COMPARISONS:
-            op = _COMPARISONS[self.take()]
+            op = self.take()
             b, bb = self.negation()
-            if ab and bb and op in ("=", "!="):  # (truth values: Lustre's = is iff)
-                op = "<->" if op == "=" else "xor"
-            return A.Binary(op, a, b), True
+            return self.build.binary(op, a, b, ab and bb), True
         return a, ab
 
-    def negation(self) -> tuple[A.Expr, bool]:
+    def negation(self) -> tuple[Any, bool]:
         if self.peek() == "not":
             self.take()
             a, _ = self.negation()
-            return A.Unary("!", a), True
+            return self.build.not_(a), True
         return self.additive()
 
-    def additive(self) -> tuple[A.Expr, bool]:
+    def additive(self) -> tuple[Any, bool]:
         a, ab = self.multiplicative()
         while self.peek() in ("+", "-"):
             op = self.take()
             b, _ = self.multiplicative()
-            a, ab = A.Binary(op, a, b), False
+            a, ab = self.build.binary(op, a, b, False), False
         return a, ab
 
-    def multiplicative(self) -> tuple[A.Expr, bool]:
+    def multiplicative(self) -> tuple[Any, bool]:
         a, ab = self.unary()
         while self.peek() in ("*", "/", "mod"):
             op = self.take()
             b, _ = self.unary()
-            a, ab = A.Binary(op, a, b), False
+            a, ab = self.build.binary(op, a, b, False), False
         return a, ab
 
-    def unary(self) -> tuple[A.Expr, bool]:
+    def unary(self) -> tuple[Any, bool]:
         tok = self.peek()
         if tok == "-":
             self.take()
             a, _ = self.unary()
-            if isinstance(a, A.NumLit) and not a.text.startswith("-"):
-                return A.NumLit("-" + a.text), False
-            return A.Unary("-", a), False
+            return self.build.neg(a), False
         if tok == "pre":
             self.take()
             a, ab = self.unary()
-            if ab:
-                return A.Call("preBool", (A.BoolLit(False), a)), True
-            return A.Call("preReal", (A.NumLit("0"), a)), False
+            return self.build.pre(a, ab), ab
         return self.atom()
 
-    def atom(self) -> tuple[A.Expr, bool]:
+    def atom(self) -> tuple[Any, bool]:
         if self.peek() == "if":
             return self.if_then_else()
         at, tok = self.offset(), self.take()
@@ -299,9 +448,9 @@ class _Parser:
             self.take(")")
             return e
         if tok in ("true", "false"):
-            return A.BoolLit(tok == "true"), True
+            return self.build.literal(tok), True
         if tok[0].isdigit() or tok[0] == ".":
-            return A.NumLit(tok), False
+            return self.build.literal(tok), False
         if tok in _REFUSED:
             raise LustreError(f"'{tok}' (character {at}) is outside FRET's Lustre subset")
         if tok in _KEYWORDS or not (tok[0].isalpha() or tok[0] == "_"):
@@ -313,5 +462,5 @@ class _Parser:
                 self.take(",")
                 args.append(self.expr())
             self.take(")")
-            return A.Call(tok, tuple(args)), False
-        return A.Var(tok), self.is_boolean(tok)
+            return self.build.call(tok, args), False
+        return self.build.var(tok), self.is_boolean(tok)

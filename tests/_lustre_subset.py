@@ -1,6 +1,8 @@
 """A small reader and stream interpreter of the Lustre subset ``fretc --emit cocospec`` writes
 (and FRET's CoCoSpec formulas use), written for the tests, independent of
-``fretc.compiler.cocospec``: ``node``s (parameters, ``var`` locals, equations), Kind 2
+``fretc.compiler.cocospec``, and stricter than Kind 2 where fretc's output must be (no
+keyword of Kind 2 names a variable, a label is one line, no comment is unclosed, nothing Kind
+2's lexer reads otherwise; :func:`tokens`): ``node``s (parameters, ``var`` locals, equations), Kind 2
 ``contract`` nodes (``var`` ghosts, ``guarantee``/``assume``), expressions with ``->``,
 ``pre``, ``if then else``, ``not and or xor =>``, comparisons, ``+ - * / div mod``, unary
 minus, Kind 2's conversions ``real e`` and ``int e``, and node calls, read with Kind 2's
@@ -20,27 +22,43 @@ from dataclasses import dataclass, field
 from typing import Any
 
 _TOKEN = re.compile(r"""
-    (?P<space>\s+|--[^\n]*|\(\*.*?\*\))
-  | (?P<string>"(?:[^"\\]|\\.)*")
+    (?P<annotation>--[%!]|\(\*[%!@]|/\*|//|\*\)|and\s+then|or\s+else)
+  | (?P<space>\s+|--[^\n]*|\(\*.*?\*\))
+  | (?P<unclosed>\(\*)
+  | (?P<string>"(?:[^"\\\n]|\\[^\n])*")
   | (?P<num>[0-9]+\.[0-9]*(?:[eE][-+]?[0-9]+)?|[0-9]+)
   | (?P<id>[A-Za-z_][A-Za-z0-9_]*)
   | (?P<sym>->|=>|<>|<=|>=|[()\[\],;:=<>+\-*/])
 """, re.X | re.S)
 
-KEYWORDS = {"node", "returns", "var", "let", "tel", "contract", "guarantee", "assume", "if",
-            "then", "else", "not", "and", "or", "xor", "pre", "true", "false", "div", "mod",
-            "bool", "int", "real"}
+#: Kind 2's keywords (its Lustre lexer's table, and ``lsh``/``rsh``): none names a variable
+KIND2_KEYWORDS = frozenset("""
+    type datatype int uint sint uint8 uint16 uint32 uint64 int8 int16 int32 int64 real bool
+    subrange of subtype struct enum history map set const param transparent opaque imported
+    node function returns var let tel con noc assert check reachable invariant provided from
+    at within contract import true false not and xor forall exists or in if then else elsif
+    fi when cond otherwise end frame div mod any choose current condact activate initial
+    default every restart merge pre fby mode assume guarantee require ensure weakly
+    assumption_vars with match lsh rsh
+""".split())
+KEYWORDS = KIND2_KEYWORDS
 
 
 def tokens(text: str) -> list[tuple[str, str]]:
     """``[(kind, text)]``: kinds ``string``, ``num``, ``id``, ``kw``, ``sym``. Raises
-    ``SyntaxError`` at a character outside the subset, or an unclosed comment."""
+    ``SyntaxError`` at a character outside the subset, an unclosed ``(*`` comment, a string
+    holding a line break (fretc's labels are one line), and at what Kind 2's lexer reads
+    otherwise than this reader would: an annotation (``--%``, ``--!``, ``(*@``, ``(*%``,
+    ``(*!``), a ``/*`` or ``//`` comment, a ``*)`` outside a comment, and ``and then`` /
+    ``or else`` (Kind 2's short-circuit operators, even before ``then_v``)."""
     out, i = [], 0
     while i < len(text):
         m = _TOKEN.match(text, i)
         if m is None:
             raise SyntaxError(f"unexpected {text[i:i + 20]!r}")
         kind = m.lastgroup or ""
+        if kind in ("annotation", "unclosed"):
+            raise SyntaxError(f"{kind} {m.group(kind)!r} at character {i}")
         if kind != "space":
             word = m.group(kind)
             out.append(("kw" if kind == "id" and word in KEYWORDS else kind, word))

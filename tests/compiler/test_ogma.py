@@ -9,9 +9,11 @@ from __future__ import annotations
 
 import json
 import re
+import sys
 from pathlib import Path
 
 from click.testing import CliRunner
+from hypothesis import given, settings
 
 from fretc.cli import main
 from fretc.compiler.build import compile_entries
@@ -177,3 +179,81 @@ def test_numbers_and_names_outside_ogmas_tokens_are_left_out(tmp_path):
         ("R2", "the name _DQT_last_DQT_ is no identifier of Ogma's SMV grammar")]
     got = _ogma_reads(files["cSpec"])
     assert [r[0] for r in got["requirements"]] == ["R3"]
+
+
+# ---------------------------------------------------------------- names, hostile glossaries
+sys.path.insert(0, str(ROOT / "tests"))
+import _hostile_fret as hostile  # noqa: E402
+import _lustre_subset as lus  # noqa: E402
+
+from fretc.common.textsafe import one_line  # noqa: E402
+
+#: the words of Ogma's SMV grammar that are no variable
+_SMV_WORDS = frozenset("X G F Y Z H O S T V U TRUE FALSE FTP LAST xor".split())
+
+
+def _smv_names(pt: str) -> set[str]:
+    return {w for w in re.findall(r"[A-Za-z_][A-Za-z0-9_']*", pt) if w not in _SMV_WORDS}
+
+
+def _lustre_names(code: str) -> set[str]:
+    """The variables a CoCoSpecCode expression reads (names not called)."""
+    toks = lus.tokens(code)
+    return {w for i, (kind, w) in enumerate(toks) if kind == "id"
+            and (i + 1 == len(toks) or toks[i + 1][1] != "(")}
+
+
+def _check_names(text: str) -> dict:
+    """Ogma reads the file; ``Other_variables`` names each variable once, and every name
+    each requirement's ``ptLTL`` and ``CoCoSpecCode`` read is one of them (and both read the
+    same); each requirement's name is one line."""
+    got = _ogma_reads(text)
+    names = [n for n, _t in got["external"]]
+    assert len(names) == len(set(names)), names
+    for rid, _fretish, pt, coco in got["requirements"]:
+        assert "\n" not in rid and rid == one_line(rid)
+        assert _smv_tokens_ok(pt), pt
+        assert _smv_names(pt) <= set(names), (rid, pt, names)
+        if coco:
+            assert _lustre_names(coco) == _smv_names(pt), (rid, pt, coco)
+    return got
+
+
+def test_ogma_names_are_the_contracts_in_every_field(tmp_path):
+    """Variables named ``node``, ``let``, ``tel`` (and a clash with a renaming, ``let_v``):
+    ``Other_variables``, ``ptLTL`` and ``CoCoSpecCode`` all read ``node_v``, ``let_v``,
+    ``tel_v``, ``let_v_2``; an id holding a line break is one line."""
+    path = tmp_path / "p.json"
+    path.write_text(json.dumps({
+        "requirements": [{"reqid": "R1\nR2", "fulltext": "the c shall always satisfy node & "
+                          "(let_v | tel) & k"}],
+        "variables": [{"variable_name": n, "component_name": "c", "idType": kind,
+                       "dataType": "boolean", "assignment": text}
+                      for n, kind, text in [("node", "Input", ""), ("let", "Input", ""),
+                                            ("tel", "Output", ""),
+                                            ("k", "Internal", "node and not let")]]}))
+    files, skipped, notes = emit_ogma(_compiled([path]))
+    assert skipped == []
+    got = _check_names(files["cSpec"])
+    assert got["external"] == [("node_v", "bool"), ("let_v", "bool"), ("tel_v", "bool"),
+                               ("let_v_2", "bool"), ("k", "bool")]
+    [(rid, _text, pt, coco)] = got["requirements"]
+    assert rid == "R1 R2"
+    assert pt == "(H ((node_v & (let_v_2 | tel_v)) & k))"
+    assert coco == "H(((node_v and (let_v_2 or tel_v)) and k))"
+    assert notes == ["cSpec: k (a FRET Internal variable) is an Other_variables entry: the "
+                     "monitor reads it as an input"]
+
+
+@settings(max_examples=60, deadline=None, derandomize=True)
+@given(hostile.exports())
+def test_hostile_glossaries_give_ogma_the_names_its_expressions_read(tmp_path_factory, doc):
+    """Property over the hostile FRET exports of ``tests/_hostile_fret.py`` (keywords,
+    library nodes and renamings as names; hostile assignments and ids): every file reads as
+    Ogma reads it, its ``Other_variables`` name each variable once, and each requirement's
+    ``ptLTL`` and ``CoCoSpecCode`` read those names and the same ones."""
+    path = tmp_path_factory.mktemp("hostile") / "p.json"
+    path.write_text(doc)
+    files, _skipped, _notes = emit_ogma(_compiled([path]))
+    for text in files.values():
+        _check_names(text)

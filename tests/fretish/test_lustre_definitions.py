@@ -138,6 +138,23 @@ def test_what_is_outside_the_subset_is_refused_with_where(text, why):
     assert why in str(err.value)
 
 
+@pytest.mark.parametrize("text", ["x --y", "x -- y", "x - (* y *) 1", "x /* y */", "x // y"])
+def test_a_lustre_comment_is_refused_not_read_as_operators(text):
+    """Lustre reads ``x --y`` as ``x`` (``--`` opens a comment to the end of the line); the
+    subset read it as ``x - (-y)``, another value than FRET's. A comment in a definition is
+    refused, so the variable stays free with the reason (the analyses, the audit and the
+    monitors read it so), and so is a number longer than a FRETish number may be."""
+    with pytest.raises(LustreError, match="comment"):
+        parse_definition(text, _is_bool)
+    defs = definitions((_var("x", kind="Input", data_type="double"),
+                        _var("y", kind="Input", data_type="double"),
+                        _var("d", text, data_type="double")))
+    assert "d" not in defs.values and "a Lustre comment" in defs.free["d"]
+    assert parse_definition("x - -y", _is_bool) == parse_definition("x - (- y)", _is_bool)
+    with pytest.raises(LustreError, match="a number of 101 characters"):
+        parse_definition("x + 1" + "0" * 100, _is_bool)
+
+
 def _var(name: str, assignment: str = "", kind: str = "Internal",
          data_type: str = "boolean") -> FretVariable:
     return FretVariable("c", name, kind, data_type, assignment)

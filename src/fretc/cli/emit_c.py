@@ -81,8 +81,7 @@ def write_exports(emit: str, compiled: Sequence[Compiled], output: str | None,
     if emit == "cocospec":
         from fretc.compiler.cocospec import emit_cocospec
 
-        outputs, skipped = emit_cocospec(compiled)
-        notes: list[str] = []
+        outputs, skipped, notes = emit_cocospec(compiled)
         suffix = ".lus"
     else:
         from fretc.compiler.ogma import emit_ogma
@@ -102,4 +101,4 @@ def write_exports(emit: str, compiled: Sequence[Compiled], output: str | None,
             where = "" if stem == "-" else f" ({stem}{suffix})"  # "-": in no file
             click.echo(shown(f"skipped {rid}{where}: {why}".replace("\n", " ")), err=True)
     for note in notes:
-        click.echo(shown(f"note: {note}"), err=True)
+        click.echo(shown(f"note: {note}".replace("\n", " ")), err=True)
