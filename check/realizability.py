@@ -45,6 +45,7 @@ from fretc.check.checker import SPOT_MAX_BOUND
 from fretc.check.smt import max_bound
 from fretc.check.solver import UNKNOWN
 from fretc.check.witness import formula_atoms
+from fretc.check.bounds import Bound, bounds_of, feasibility
 from fretc.check.numeric_abstraction import NumericAbstraction, simple_comparison
 from fretc.check.predicates import PredicateBudget, clusters, mixed_invariants
 from fretc.check.safety_game import Outside, game_atoms, letter_name
@@ -373,18 +374,20 @@ class _Decider:
         """Spot's synthesis game on the ft_inf formulas (as before the safety game)."""
         checker, inputs = self.checker, self.inputs
         phis = [x.phi for x in items]
-        atoms = formula_atoms(phis)
+        env_clusters, ctl_clusters, ctl_why, env_why, orders = _predicate_invariants(
+            phis, inputs, self.roles)
+        atoms = formula_atoms(phis + orders)
         outs = sorted({letter_name(a) for a in atoms
                        if not all(v in inputs for v in _atom_vars(a))})
         in_vars = sorted({c[0] for a in atoms if a.op == "cmp"
                           and (c := simple_comparison(a)) and c[0] in inputs})
         out_vars = sorted({c[0] for a in atoms if a.op == "cmp"
                            and (c := simple_comparison(a)) and c[0] not in inputs})
-        env_clusters, ctl_clusters, ctl_why, env_why = _predicate_invariants(
-            phis, inputs, self.roles)
-        inv_in = ir.and_all(*(checker.numeric.variable_invariant(v) for v in in_vars),
+        # (the bounds' order comparisons with constants join the inputs' regions)
+        numeric = NumericAbstraction.of(phis + orders) if orders else checker.numeric
+        inv_in = ir.and_all(*(numeric.variable_invariant(v) for v in in_vars),
                             env_clusters)
-        inv_out = ir.and_all(*(checker.numeric.variable_invariant(v) for v in out_vars),
+        inv_out = ir.and_all(*(numeric.variable_invariant(v) for v in out_vars),
                              ctl_clusters)
         if inv_in.op == "true":  # a conjunction: one automaton per conjunct
             parts = [p for p in phis + [inv_out] if p.op != "true"] or [ir.TRUE]
@@ -418,7 +421,7 @@ class _Decider:
 
 def _predicate_invariants(phis: Sequence[ir.Node], inputs: Sequence[str],
                           streams: Collection[str] = ()
-                          ) -> tuple[ir.Node, ir.Node, list[str], list[str]]:
+                          ) -> tuple[ir.Node, ir.Node, list[str], list[str], list[ir.Node]]:
     """The comparisons of several variables in ``phis`` made exact for Spot's game
     (:mod:`fretc.check.predicates`): ``(environment's invariant, controller's invariant, why
     a realizable answer is not exact, why an unrealizable one is not)``, the invariants ``G``
@@ -427,13 +430,22 @@ def _predicate_invariants(phis: Sequence[ir.Node], inputs: Sequence[str],
     values no numbers give: a win of that player proves nothing. A cluster of inputs and
     outputs gives the controller only the choices numbers realize whatever the inputs'
     numbers (:func:`fretc.check.predicates.mixed_invariants`): its wins are sound, its losses
-    are not. A comparison reading a stream variable of ``streams`` is undecided as one
-    reading a previous value (:func:`fretc.check.predicates.undecidable`)."""
+    are not; except a comparison of one output with a term over the inputs (a bound,
+    :mod:`fretc.check.bounds`, the shield's atoms too): which of its truth values numbers
+    give at a tick is the environment's move, the order comparisons of the bounds (returned
+    last, the environment's atoms) with the controller's invariant saying which truth values
+    each order allows, exact both ways. A comparison reading a stream variable of
+    ``streams`` is undecided as one reading a previous value
+    (:func:`fretc.check.predicates.undecidable`)."""
     undecided: list = []
+    bounds = _exact_bounds(phis, inputs, streams)
+    orders, feasible = _feasible(phis, bounds)
+    plain = [_without_bounds(f, bounds) for f in phis]
     try:
-        found = clusters(phis, inputs, undecided=undecided, streams=streams)
+        found = clusters(plain + ([ir.and_all(*orders)] if orders else []), inputs,
+                         undecided=undecided, streams=streams)
     except PredicateBudget as exc:
-        return ir.TRUE, ir.TRUE, [str(exc)], [str(exc)]
+        return ir.TRUE, ir.TRUE, [str(exc)], [str(exc)], []
     env_inv: list[ir.Node] = []
     ctl_inv: list[ir.Node] = []
     ctl_why: list[str] = []
@@ -467,9 +479,57 @@ def _predicate_invariants(phis: Sequence[ir.Node], inputs: Sequence[str],
                 f"{why}, and the game's {side} may give it truth values no numbers give")
         else:
             (env_inv if c.is_input else ctl_inv).append(c.invariant)
-    env, ctl = ir.and_all(*env_inv), ir.and_all(*ctl_inv)
+    env, ctl = ir.and_all(*env_inv), ir.and_all(*ctl_inv, feasible)
     return (ir.TRUE if env.op == "true" else ir.G(env),
-            ir.TRUE if ctl.op == "true" else ir.G(ctl), ctl_why, env_why)
+            ir.TRUE if ctl.op == "true" else ir.G(ctl), ctl_why, env_why, orders)
+
+
+def _exact_bounds(phis: Sequence[ir.Node], inputs: Sequence[str], streams: Collection[str]
+                  ) -> dict[ir.Node, Bound]:
+    """The bounds of ``phis`` read exactly (:mod:`fretc.check.bounds`): those of outputs
+    compared with no constant by ``=``/``!=`` (no half-line) and in no other comparison of
+    several variables, reading no stream variable; the others stay comparisons of inputs
+    and outputs (:func:`fretc.check.predicates.mixed_invariants`)."""
+    bounds = bounds_of(phis, inputs)
+    other: set[str] = set()
+    for f in phis:
+        for n in ir.walk(f):
+            if n.op != "cmp" or n in bounds:
+                continue
+            sc = simple_comparison(n)
+            if sc is None or sc[1] in ("=", "!="):
+                other.update(ir.name_of(x) for x in ir.walk(n) if x.op == "var")
+    return {a: b for a, b in bounds.items() if b.output not in other
+            and not set(ir.variables(a)) & set(streams)}
+
+
+def _feasible(phis: Sequence[ir.Node], bounds: dict[ir.Node, Bound]
+              ) -> tuple[list[ir.Node], ir.Node]:
+    """The order comparisons of ``bounds`` and the controller's invariant
+    (:func:`fretc.check.bounds.feasibility`), with the comparisons of the bounded outputs
+    with constants in ``phis``."""
+    if not bounds:
+        return [], ir.TRUE
+    bounded = {b.output for b in bounds.values()}
+    numeric = NumericAbstraction.of(phis)
+    return feasibility(list(bounds.values()),
+                       [a for v in bounded for a in numeric.atoms.get(v, [])])
+
+
+def _without_bounds(f: ir.Node, bounds: dict[ir.Node, Bound]) -> ir.Node:
+    """``f`` with each bound replaced by a boolean atom (a bound is no cluster's)."""
+    if not bounds:
+        return f
+    names = {a: ir.ap(f"__bound_{k}") for k, a in enumerate(bounds)}
+
+    def sub(n: ir.Node) -> ir.Node:
+        got = names.get(n)
+        if got is not None:
+            return got
+        if not n.args or n.op in ("cmp", "var", "num", "arith", "fn", "neg", "pre"):
+            return n
+        return ir.rebuild(n, tuple(sub(a) for a in n.args))
+    return sub(f)
 
 
 def _unrealizable(checker, decide: _Decider, comp, ans: dict, inputs: list[str],
@@ -488,10 +548,13 @@ def _unrealizable(checker, decide: _Decider, comp, ans: dict, inputs: list[str],
     entry["standing"] = found.standing
     entry["cut"] = cut
     inputs = [v for v in inputs if v in _variables(comp)]  # (the group's own)
-    env = _environment(checker, ans["counter"], inputs, ans["note"])
+    phis = [x.phi for x in comp]
+    orders = _feasible(phis, _exact_bounds(phis, decide.inputs, decide.roles))[0]
+    numeric = NumericAbstraction.of(phis + orders) if orders else checker.numeric
+    env = _environment(numeric, ans["counter"], inputs, ans["note"])
     entry["environment"] = env
     if ans["run"]:
-        entry["run"] = [_values(checker, letter, _variables(comp)) for letter in ans["run"]]
+        entry["run"] = [_values(numeric, letter, _variables(comp)) for letter in ans["run"]]
     involved = sorted({i for s in names for i in s}, key=_ids(comp).index) or _ids(comp)
     msg = ("no controller meets " + ", ".join(_ids(comp)) + " whatever the inputs ("
            + (", ".join(inputs) or "none") + ") do: "
@@ -504,14 +567,15 @@ def _unrealizable(checker, decide: _Decider, comp, ans: dict, inputs: list[str],
                                             "run": entry.get("run", [])}))
 
 
-def _environment(checker, counter, inputs: Sequence[str], note: str = "") -> dict:
+def _environment(numeric: NumericAbstraction, counter, inputs: Sequence[str],
+                 note: str = "") -> dict:
     """The input lasso as rows of input values, or a note when none exists."""
     if counter is None:
         return {"note": note or "no fixed input sequence defeats every controller: the "
                                 "environment must react to the outputs"}
     prefix, cycle = counter
-    return {"prefix": [_values(checker, x, inputs) for x in prefix],
-            "cycle": [_values(checker, x, inputs) for x in cycle],
+    return {"prefix": [_values(numeric, x, inputs) for x in prefix],
+            "cycle": [_values(numeric, x, inputs) for x in cycle],
             "note": "inputs tick by tick: the prefix, then the cycle repeated forever; no "
                     "output sequence meets the requirements along it"}
 
@@ -523,16 +587,15 @@ def _variables(comp) -> list[str]:
     return out
 
 
-def _values(checker, letter: dict, names: Sequence[str]) -> dict:
+def _values(numeric: NumericAbstraction, letter: dict, names: Sequence[str]) -> dict:
     """One tick's letter ``{atom name: bool}`` as values of the FRET variables ``names``
-    (a number in the region the comparisons' truth values give)."""
-    cmp_atoms = {to_smv(a): a for name in checker.numeric.atoms
-                 for a in checker.numeric.atoms[name]}
+    (a number in the region the comparisons' truth values give, ``numeric``'s)."""
+    cmp_atoms = {to_smv(a): a for name in numeric.atoms for a in numeric.atoms[name]}
     truth = {cmp_atoms[k]: v for k, v in letter.items() if k in cmp_atoms}
-    numbers = checker.numeric.values(truth)
+    numbers = numeric.values(truth)
     row = {}
     for v in names:
-        if v in checker.numeric.atoms:
+        if v in numeric.atoms:
             row[v] = numbers[v]
         else:
             row[v] = bool(letter.get(mangle(v), False))

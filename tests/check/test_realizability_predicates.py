@@ -1,8 +1,10 @@
 """Realizability with comparisons of several variables (:mod:`fretc.check.predicates`):
 Spot's game takes each such comparison as a proposition, so a player could give ``x < y``
 and ``y < x`` both true. The clusters' invariants make the per-tick ones exact; a
-comparison z3 cannot decide tick by tick (``preReal``) or one of inputs and outputs makes
-the win of the player it favours ``unknown``, never ``realizable``/``unrealizable``."""
+comparison z3 cannot decide tick by tick (``preReal``) or one of inputs and outputs that is
+no bound makes the win of the player it favours ``unknown``, never
+``realizable``/``unrealizable``; a bound of one output by the inputs is exact
+(:mod:`fretc.check.bounds`)."""
 
 from __future__ import annotations
 
@@ -76,11 +78,32 @@ def test_an_output_above_an_input_is_realizable(tmp_path: Path) -> None:
     assert got["realizable"] is True
 
 
-def test_a_choice_that_depends_on_the_inputs_number_makes_realizable_unknown_never_false(
+def test_a_bound_whose_feasibility_the_environment_decides_is_exactly_unrealizable(
         tmp_path: Path) -> None:
-    """x above a and below 3 fails for a >= 3 (truly unrealizable), but the game's
-    controller sees truth values, not numbers: its loss is unknown, with why."""
+    """x above a and below 3 fails for a >= 3 (truly unrealizable). It was unknown (the
+    game's controller saw truth values, not numbers); ``x > a`` is a bound of x by the input
+    (fretc.check.bounds): which of its truth values numbers give beside ``x < 3.0`` is the
+    environment's move (the order comparison ``3.0 <= a``), so the answer is exact, and the
+    input that defeats every controller is a number at or above 3."""
     got = realizability_of(tmp_path, "A: the sw shall always satisfy x > a\n"
+                                     "B: the sw shall always satisfy x < 3.0\n", ["a"])
+    assert got["realizable"] is False
+    assert got["environment"]["prefix"] + got["environment"]["cycle"] == [{"a": 3.0}]
+
+
+def test_a_bound_the_environment_keeps_feasible_is_realizable(tmp_path: Path) -> None:
+    """Below 3 (the environment's condition, related by the numeric abstraction to the
+    order comparison of the bounds) the controller can keep x above a and below 3."""
+    got = realizability_of(tmp_path, "A: whenever a < 3.0 the sw shall immediately satisfy "
+                                     "x > a\nB: the sw shall always satisfy x < 3.0\n", ["a"])
+    assert got["realizable"] is True
+
+
+def test_a_comparison_of_inputs_and_outputs_that_is_no_bound_leaves_a_loss_unknown(
+        tmp_path: Path) -> None:
+    """``x * a > 1`` reads x with a factor the input sets: no bound; the game's controller
+    sees truth values, not numbers, so its loss is unknown, with why."""
+    got = realizability_of(tmp_path, "A: the sw shall always satisfy x * a > 1.0\n"
                                      "B: the sw shall always satisfy x < 3.0\n", ["a"])
     assert got["realizable"] == "unknown"
     assert "compare the input(s) a with the output(s) x" in got["why"]
