@@ -88,6 +88,9 @@ class Shield:
     #: the assumptions of the environment the games took (:mod:`fretc.shield.plan`), as
     #: the requirements are carried
     assumptions: tuple[Requirement, ...] = ()
+    #: the outputs scaled together, each a twist (``[shield] twists``,
+    #: :mod:`fretc.shield.twists`)
+    twists: tuple[tuple[str, ...], ...] = ()
 
     def weights(self, k: int) -> dict[int, tuple[bool, int]]:
         """Machine ``k``'s preferences as :func:`fretc.shield.machine.correct` takes them:
@@ -188,14 +191,16 @@ def build_shield(compiled: Sequence[Any], inputs: Sequence[str], outputs: Sequen
                  bindings: Bindings | None = None, prefer: Sequence[tuple[str, bool]] = (),
                  budget: Budget | None = None, name: str = "shield",
                  fork: bool = True, fallback: dict[str, Any] | None = None,
-                 assumptions: Sequence[Any] = ()) -> Shield:
+                 assumptions: Sequence[Any] = (),
+                 twists: Sequence[Sequence[str]] = ()) -> Shield:
     """Synthesize the shield of ``compiled`` (:class:`fretc.compiler.build.Compiled`) for the
     FRET variables ``inputs`` (the environment's) and ``outputs`` (the controller's), with
     ``bindings`` relating outputs of one message, ``prefer`` the tie-breaking preferences,
     ``budget`` each game's (``fretc check``'s defaults), ``fork`` the games in a worker
     process (False: in this one, for tests), ``fallback`` the declared outputs of a tick
     whose inputs cannot be read (:mod:`fretc.shield.fallback`; None: the shield's own),
-    ``assumptions`` the environment's (compiled; the games take them, :mod:`fretc.shield.plan`).
+    ``assumptions`` the environment's (compiled; the games take them, :mod:`fretc.shield.plan`),
+    ``twists`` the outputs scaled together (``[shield] twists``, :mod:`fretc.shield.twists`).
 
     Raises:
         ShieldError: a free-form requirement (no formula), a requirement that cannot be
@@ -203,14 +208,19 @@ def build_shield(compiled: Sequence[Any], inputs: Sequence[str], outputs: Sequen
             the inputs that defeat every controller), an unknown preference, requirements
             of different tick periods (the shield steps on one tick: a duration of the other
             period would count ticks of the wrong length), outputs a FRET export declares
-            whole numbers that a requirement compares (:func:`_integer_outputs`).
+            whole numbers that a requirement compares (:func:`_integer_outputs`), a twist
+            that is not one of outputs of numbers (:func:`fretc.shield.twists.check_twists`).
         ShieldUnknown: a component's game past its budget, or comparisons of several
             variables with too many valuations to decide
             (:data:`fretc.shield.predicates.MAX_VALUATIONS`)."""
     periods = _one_period([*compiled, *assumptions])
     integers = _integer_outputs(compiled, outputs)
+    from fretc.shield.twists import check_twists
+
+    twists = check_twists(twists, outputs, _numbers([*compiled, *assumptions]), integers,
+                          _booleans([*compiled, *assumptions]))
     try:
-        p = plan(compiled, inputs, outputs, bindings, integers, assumptions)
+        p = plan(compiled, inputs, outputs, bindings, integers, assumptions, twists)
     except PredicateBudget as exc:
         raise ShieldUnknown(f"no shield: {exc}") from None
     machines = []
@@ -233,15 +243,19 @@ def build_shield(compiled: Sequence[Any], inputs: Sequence[str], outputs: Sequen
               if v not in read]
     in_message = {v for c in p.components for g in c.messages if g.model is not None
                   for v in g.model["passed"]}
+    twisted = {v for c in p.components for t in c.twists for v in t}
     unread += [f"{v}: declared an output, read by no requirement (passed through unchanged"
-               + (", where the decided message of its topic keeps its field; the C form has "
-                  "no field for it)" if v in in_message else ")")
+               + (", scaled with its twist" if v in twisted else "")
+               + (", where the decided message of its topic keeps its field"
+                  + ("" if v in twisted else "; the C form has no field for it")
+                  if v in in_message else "") + ")"
                for v in p.outputs if v not in read]
     assert len(periods) <= 1  # (mixed periods were refused above)
     from fretc.shield.fallback import fallback_of
 
-    fb, fb_notes = fallback_of(machines, fallback, p.outputs, _numbers(compiled), p.integers,
-                               prefer)
+    fb, fb_notes = fallback_of(machines, fallback, p.outputs,
+                               _numbers(compiled) | {v for t in twists for v in t},
+                               p.integers, prefer)
     digest = hashlib.sha256("\n".join(
         [f"{r.id}:{r.text}" for r in reqs] + [f"in:{','.join(p.inputs)}",
                                               f"out:{','.join(p.outputs)}",
@@ -250,14 +264,16 @@ def build_shield(compiled: Sequence[Any], inputs: Sequence[str], outputs: Sequen
         + [str(m.nodes) for m in machines]
         + [str(m.clusters) for m in machines if m.clusters]
         + [f"fallback:{fb}"]
-        + [f"assumes {a.id}:{a.text}" for a in assumed]).encode()).hexdigest()
+        + [f"assumes {a.id}:{a.text}" for a in assumed]
+        + [f"twist:{','.join(t)}" for t in twists]).encode()).hexdigest()
     return Shield(name, tuple(machines), tuple(p.inputs), tuple(p.outputs), reqs,
                   dict(p.monitored), tuple(prefer), next(iter(periods), None),
                   tuple(tuple(g.variables) for c in p.components for g in c.messages
                         if len(g.variables) > 1),
                   _numbers([*compiled, *assumptions]),
                   read, tuple(p.notes) + tuple(unread) + tuple(fb_notes), digest,
-                  integers=tuple(p.integers), fallback=fb, assumptions=assumed)
+                  integers=tuple(p.integers), fallback=fb, assumptions=assumed,
+                  twists=tuple(tuple(t) for t in twists))
 
 
 def _declared(compiled: Sequence[Any]) -> list[FretVariable]:
@@ -301,6 +317,15 @@ def _integer_outputs(compiled: Sequence[Any], outputs: Sequence[str]) -> list[st
     return sorted(ints)
 
 
+def _booleans(compiled: Sequence[Any]) -> frozenset[str]:
+    """The FRET variables read as booleans (outside every comparison and arithmetic) in any
+    formula."""
+    out: set[str] = set()
+    for c in compiled:
+        out.update(ir.name_of(n) for n in ir.walk(c.formalization.ft_inf) if n.op == "ap")
+    return frozenset(out)
+
+
 def _numbers(compiled: Sequence[Any]) -> frozenset[str]:
     """The FRET variables read as numbers (under a comparison or arithmetic) in any formula."""
     out: set[str] = set()
@@ -324,8 +349,12 @@ def _machine(worker: SpotWorker, comp: Component, p: Plan) -> Machine:
     if not ans["realizable"]:
         raise ShieldError(_unrealizable(comp, p, ans))
     back = {ap: pred for pred, ap in comp.names.items()}
-    atoms = [(_atom(back.get(a, a)), is_in) for a, is_in in ans["atoms"]]
+    atoms = [(_atom(back.get(a, a), comp.bounds), is_in) for a, is_in in ans["atoms"]]
     outs = [a for a, i in atoms if not i]
+    bounds = tuple({"atom": j, "variable": a.variable, "down": int(b.down),
+                    "estimate": term(b.bound)}
+                   for j, a in enumerate(outs) for b in comp.bounds.values()
+                   if a.text == to_smv(b.atom))
     clusters = []
     for cl in comp.clusters:
         if cl.is_input:
@@ -338,14 +367,18 @@ def _machine(worker: SpotWorker, comp: Component, p: Plan) -> Machine:
                    tuple(ans["init"]), tuple(tuple(n) for n in ans["nodes"]), ans["safe"],
                    tuple(ans["next"]), tuple(ans["keep"]), ans["env_ok"], ans["ctl_ok"],
                    tuple(comp.messages), tuple(clusters), ans["stats"], ans["robust"],
-                   tuple(a.id for a in comp.assumptions), tuple(ans["watch"]))
+                   tuple(a.id for a in comp.assumptions), tuple(ans["watch"]), bounds,
+                   tuple(tuple(t) for t in comp.twists))
 
 
-def _atom(node: Node) -> Atom:
+def _atom(node: Node, bounds: dict[Node, Any] | None = None) -> Atom:
     """An IR atom (a boolean variable, a comparison with a constant, a comparison of
-    several variables) as an :class:`Atom`."""
+    several variables, a bound of ``bounds``: its ``variable`` the output it bounds) as an
+    :class:`Atom`."""
     if node.op == "cmp" and simple_comparison(node) is None:
-        first = next(ir.name_of(x) for x in ir.walk(node) if x.op == "var")
+        bound = (bounds or {}).get(node)
+        first = bound.output if bound is not None else next(
+            ir.name_of(x) for x in ir.walk(node) if x.op == "var")
         return Atom(to_smv(node), first, "pred", None, letter_name(node), term(node))
     if node.op == "ap":
         return Atom(to_smv(node), ir.name_of(node), name=letter_name(node))

@@ -16,7 +16,16 @@ Files ``<name>_shield.h`` and ``<name>_shield.c`` (prefix ``P`` = the name), and
   changed (``s->reasons``: bit ``r`` set when ``P_SHIELD_REQUIREMENT_IDS[r]`` forced it), 0
   when not, and -1 only when a machine no longer knows its state and the shield has no
   fallback (no outputs: ``corrected`` untouched). ``s->fault`` says what could not be read,
-  the first that holds: 1 an input, 3 a machine that no longer knows its state, 2 a proposal.
+  the first that holds: 1 an input, 3 a machine that no longer knows its state, 2 a proposal,
+  4 an output bounded by the inputs given the number nearest the fallback's.
+
+**Outputs bounded by the inputs** (:mod:`fretc.check.bounds`) are computed as the Python
+form computes them (:mod:`fretc.shield.runtime_bounds`): per bound a C function of its
+comparison with the output's value ``x`` and one of its bound's value, each comparison's
+threshold found by the same galloping and bisection over the doubles' order (the threshold is
+unique: the same number), the proposal clamped between the decided comparisons' ends; and
+each twist is scaled as the Python form scales it, the outputs struct holding a twist's
+output no requirement reads.
 
 **An input number that is NaN is any value**, as in the Python form (its module docstring):
 each machine keeps a *belief*, the states it may be in, in an array of fixed capacity in the
@@ -146,29 +155,37 @@ def _double(x: float) -> str:
     return text if any(ch in text for ch in ".en") else text + ".0"
 
 
-def c_term(t: tuple[Any, ...], struct: str, names: dict[str, str] | None = None) -> str:
+def c_term(t: tuple[Any, ...], struct: str, names: dict[str, str] | None = None,
+           locals_: dict[str, str] | None = None) -> str:
     """A comparison of several variables or one of its terms
     (:func:`fretc.shield.runtime.term_value`) as a C expression over the fields of
     ``struct`` (a pointer), with the runtime's double arithmetic (``min``/``max`` as
     Python's, IEEE division); ``names`` the fields' names (:func:`c_names`; default
-    :func:`c_name`)."""
+    :func:`c_name`); ``locals_`` variables read from a C variable instead (a bounded
+    output's value ``x``)."""
     op = t[0]
+
+    def sub(u: tuple[Any, ...]) -> str:
+        return c_term(u, struct, names, locals_)
+
     if op == "var":
+        if locals_ is not None and t[1] in locals_:
+            return locals_[t[1]]
         return f"{struct}->{names[t[1]] if names is not None else c_name(t[1])}"
     if op == "num":
         return _double(t[1])
     if op == "cmp":
-        return f"({c_term(t[2], struct, names)} {_C_OPS[t[1]]} {c_term(t[3], struct, names)})"
+        return f"({sub(t[2])} {_C_OPS[t[1]]} {sub(t[3])})"
     if op == "neg":
-        return f"(-{c_term(t[1], struct, names)})"
+        return f"(-{sub(t[1])})"
     if op == "fn":
-        a = c_term(t[2], struct, names)
+        a = sub(t[2])
         if t[1].startswith("abs"):
             return f"fabs({a})"
-        b = c_term(t[3], struct, names)
+        b = sub(t[3])
         rel = "<" if t[1].startswith("min") else ">"
         return f"(({b}) {rel} ({a}) ? ({b}) : ({a}))"
-    return f"({c_term(t[1], struct, names)} {op} {c_term(t[2], struct, names)})"
+    return f"({sub(t[1])} {op} {sub(t[2])})"
 
 
 def _comment(text: str) -> str:
@@ -203,6 +220,17 @@ class _CMachine:
     fallback_atoms: tuple[int, ...] | None = None
     #: the message groups' models (:func:`_c_models`): their decided values made one message
     models: tuple[dict[str, Any], ...] = ()
+    #: the outputs bounded by the inputs (:func:`_c_bounded`): each its atoms, as the
+    #: runtime's :func:`fretc.shield.runtime_bounds.bounded_value` reads them
+    bounded: tuple[dict[str, Any], ...] = ()
+    #: per bound (output atom index) its C test and estimate (:func:`_c_bounded`)
+    bound_fns: tuple[dict[str, Any], ...] = ()
+    #: the twists (:func:`_c_twists`)
+    twists: tuple[dict[str, Any], ...] = ()
+
+    def bound_fn(self, j: int) -> dict[str, Any] | None:
+        """The bound of output atom ``j`` (:attr:`bound_fns`), None when it is none."""
+        return next((f for f in self.bound_fns if f["j"] == j), None)
 
     @property
     def n_in(self) -> int:
@@ -253,14 +281,15 @@ class _CMachine:
         return 0 < self.n_vars <= 64
 
 
-def _machines(shield: Shield, compared: set[str]) -> list[_CMachine]:
+def _machines(shield: Shield, compared: set[str], cnames: dict[str, str]) -> list[_CMachine]:
     out, first, first_a = [], 0, 0
-    fields = [v for v in shield.outputs if v in shield.read]  # (the outputs struct's)
+    fields = _output_fields(shield)  # (the outputs struct's)
     in_fields = [v for v in shield.inputs if v in shield.read]  # (the inputs struct's)
     numeric_in = [v for v in in_fields if v in shield.numbers and v in compared]
     for k, t in enumerate(tables(shield)["machines"]):
         numeric = []
         clustered = {v for c in t["clusters"] for v in c["variables"]}
+        clustered |= {b["variable"] for b in t["bounds"]}  # (bounded: their own numbers)
         for v in dict.fromkeys(s[0] for s in t["outputs"]):
             if v in clustered:
                 continue
@@ -274,7 +303,8 @@ def _machines(shield: Shield, compared: set[str]) -> list[_CMachine]:
             rows = []
             for key, nums in g["numbers"].items():
                 rows.append((key, [_double(nums[v]) if v in nums else "NAN" for v in names]))
-            groups.append({"atoms": g["atoms"], "rows": rows})
+            if g["atoms"]:  # (a group of bounded outputs alone has none: C has no empty arrays)
+                groups.append({"atoms": g["atoms"], "rows": rows})
         clusters = [{"atoms": c["atoms"], "variables": c["variables"],
                      "rows": [(key, [_double(nums[v]) for v in c["variables"]])
                               for key, nums in c["numbers"].items()]}
@@ -285,16 +315,81 @@ def _machines(shield: Shield, compared: set[str]) -> list[_CMachine]:
         in_vars = tuple(tuple(sorted(in_fields.index(x) for x in (
             _term_variables(c) if op == "pred" else {var} if op is not None else set())
             if x in numeric_in)) for var, op, c in t["inputs"])
+        fns, bounded = _c_bounded(k, t, in_fields, numeric_in, cnames, shield)
         reads = {x for var, op, c in t["outputs"]
                  for x in (_term_variables(c) if op == "pred" else {var})}
         fb = shield.fallback
         out.append(_CMachine(k, t, first, numeric, groups, clusters, atom_vars, first_a,
                              in_vars, tuple(v for v in fields if v in reads),
                              tuple(int(b) for b in fb["atoms"][k]) if fb is not None
-                             else None, _c_models(t)))
+                             else None, _c_models(t), bounded, fns, _c_twists(k, t, fns)))
         first += len(t["requirements"])
         first_a += len(t["assumptions"])
     return out
+
+
+def _key_max() -> int:
+    """The position of the largest finite double in the doubles' order
+    (:mod:`fretc.shield.runtime_bounds`)."""
+    from fretc.shield.runtime_bounds import DOUBLE_MAX, _key
+
+    return _key(DOUBLE_MAX)
+
+
+def _output_fields(shield: Shield) -> list[str]:
+    """The outputs struct's fields: the outputs a requirement reads, and those a twist
+    scales."""
+    twisted = {v for t in shield.twists for v in t}
+    return [v for v in shield.outputs if v in shield.read or v in twisted]
+
+
+def _c_bounded(k: int, t: dict[str, Any], in_fields: list[str], numeric_in: list[str],
+               names: dict[str, str], shield: Shield
+               ) -> tuple[tuple[dict[str, Any], ...], tuple[dict[str, Any], ...]]:
+    """Machine ``k``'s bounds (table ``t``) as the template reads them: per bound its output
+    atom ``j``, its test (the comparison as a C expression of ``x``, the output's value, and
+    the inputs struct ``in``), its estimate, ``down`` and the inputs struct's indices of the
+    numbers it reads (unread: its bound cannot be computed); per bounded output its field,
+    its atoms in order (a constant's ``(j, op index, constant)``, a bound's ``(j, None,
+    None)``) and the fallback's number (:func:`fretc.shield.runtime_bounds.bounded_value`)."""
+    fns = []
+    for b in t["bounds"]:
+        j, v = b["atom"], b["variable"]
+        term = t["outputs"][j][2]
+        reads = sorted(in_fields.index(x) for x in _term_variables(term) - {v}
+                       if x in numeric_in)
+        fns.append({"j": j, "down": int(b["down"]), "reads": reads, "variable": v,
+                    "test": c_term(term, "in", names, {v: "x"}),
+                    "estimate": c_term(b["estimate"], "in", names)})
+    fb = shield.fallback["outputs"] if shield.fallback is not None else {}
+    bounded = []
+    for v in dict.fromkeys(b["variable"] for b in t["bounds"]):
+        atoms = []
+        for j, (var, op, c) in enumerate(t["outputs"]):
+            if var != v:
+                continue
+            atoms.append((j, None, None) if op == "pred" else
+                         (j, ["<", "<=", ">", ">=", "=", "!="].index(op), _double(c)))
+        bounded.append({"variable": v, "atoms": atoms,
+                        "fallback": _double(float(fb.get(v, 0.0)))})
+    return tuple(fns), tuple(bounded)
+
+
+def _c_twists(k: int, t: dict[str, Any], fns: tuple[dict[str, Any], ...]
+              ) -> tuple[dict[str, Any], ...]:
+    """Machine ``k``'s twists (table ``t``) as the template reads them: the outputs, and the
+    atoms reading them that a scaled value must keep (a constant's ``(j, variable index, C
+    operator, constant)``, a bound's ``(j, variable index, None, None)``)."""
+    bound = {f["j"] for f in fns}
+    out = []
+    for names in t["twists"]:
+        atoms = []
+        for j, (var, op, c) in enumerate(t["outputs"]):
+            if var in names and op is not None:
+                atoms.append((j, list(names).index(var), None, None) if j in bound else
+                             (j, list(names).index(var), _C_OPS[op], _double(c)))
+        out.append({"names": list(names), "atoms": atoms})
+    return tuple(out)
 
 
 def c_message(t: tuple[Any, ...], want: str = "n") -> str:
@@ -421,12 +516,15 @@ def render_c(shield: Shield, base: str) -> dict[str, str]:
                 compared |= _term_variables(c)
             elif op is not None:
                 compared.add(var)
-    machines = _machines(shield, compared)
-    outputs = [(v, v in shield.numbers) for v in shield.outputs if v in shield.read]
+    twisted = {v for t in shield.twists for v in t}
+    compared |= twisted  # (a twist's proposal is checked: a NaN or infinite one replaced)
+    machines = _machines(shield, compared, names)
+    outputs = [(v, v in shield.numbers or v in twisted) for v in _output_fields(shield)]
     # (the outputs of one message: a proposal one of them cannot be read replaces them all,
     # as the Python form's _replaced)
-    mates = [[(v, v in shield.numbers) for v in dict.fromkeys(m["outputs"][j][0]
-                                                              for j in g["atoms"])]
+    mates = [[(v, v in shield.numbers or v in twisted)
+              for v in dict.fromkeys([*(m["outputs"][j][0] for j in g["atoms"]),
+                                      *g.get("decides", ())])]
              for m in t["machines"] for g in m["groups"]]
     ctx = {"p": base, "P": base.upper(), "shield": shield, "t": t, "machines": machines,
            "compared": compared, "mates": [g for g in mates if len(g) > 1],
@@ -442,6 +540,9 @@ def render_c(shield: Shield, base: str) -> dict[str, str]:
            "op_map": _C_OPS, "memo_slots": MEMO_SLOTS, "belief_limit": C_BELIEF_LIMIT,
            "cases_limit": C_CASES_LIMIT, "free_limit": C_FREE_LIMIT,
            "numeric": any(m.numeric_outputs for m in machines),
+           "bounds": any(m.bound_fns for m in machines),
+           "key_max": _key_max(), "double_max": _double(1.7976931348623157e308),
+           "twist_count": sum(len(m.twists) for m in machines),
            "whole": any(v in m.t["integers"] for m in machines for v, _s, _i in m.numeric_outputs),
            "max_atoms": max([1] + [len(i) for m in machines for _v, _s, i in m.numeric_outputs])}
     return {f"{base}_shield.h": env.get_template("shield.h.j2").render(**ctx),

@@ -14,7 +14,7 @@ import math
 from typing import Any
 
 from fretc.common.textsafe import python_doc
-from fretc.shield import runtime, runtime_values
+from fretc.shield import runtime, runtime_bounds, runtime_values
 from fretc.shield.build import Shield
 from fretc.shield.message_model import group_atoms, table_of
 
@@ -37,7 +37,9 @@ def tables(shield: Shield) -> dict[str, Any]:
                 key = sum(int(vals[texts[j]]) << i for i, j in enumerate(atoms))
                 numbers[key] = dict(sorted(nums.items()))
                 fields[key] = [(t, list(path), v) for (t, path), v in sorted(flds.items())]
+            bounded = {b["variable"] for b in m.bounds} | {v for t in m.twists for v in t}
             groups.append({"atoms": atoms, "topics": list(g.topics),
+                           "decides": [v for v in [*g.variables, *g.passed] if v in bounded],
                            "numbers": dict(sorted(numbers.items())),
                            "fields": dict(sorted(fields.items())),
                            "message": None if g.model is None else table_of(
@@ -58,7 +60,8 @@ def tables(shield: Shield) -> dict[str, Any]:
             "clusters": [{"atoms": list(c["atoms"]), "variables": list(c["variables"]),
                           "numbers": dict(sorted(c["numbers"].items()))}
                          for c in m.clusters],
-            "assumptions": list(m.assumptions), "assumed": list(m.assumed)})
+            "assumptions": list(m.assumptions), "assumed": list(m.assumed),
+            "bounds": [dict(b) for b in m.bounds], "twists": [list(t) for t in m.twists]})
     return {"name": shield.name, "digest": shield.digest, "inputs": list(shield.inputs),
             "outputs": list(shield.outputs),
             "preferences": [(t, int(v)) for t, v in shield.preferences],
@@ -66,16 +69,19 @@ def tables(shield: Shield) -> dict[str, Any]:
 
 
 def _runtime_body() -> str:
-    """:mod:`fretc.shield.runtime_values`' source, then :mod:`fretc.shield.runtime`'s, each
-    without its docstring and ``__all__``; the runtime's ``from __future__`` and its import
-    of the values module left out (the two read as one module)."""
-    return _body(runtime_values) + "\n\n" + _body(runtime, runtime_values.__name__)
+    """:mod:`fretc.shield.runtime_values`' source, then :mod:`fretc.shield.runtime_bounds`'
+    and :mod:`fretc.shield.runtime`'s, each without its docstring and ``__all__``; the later
+    ones' ``from __future__`` and their imports of the earlier ones left out (the three read
+    as one module)."""
+    values, bounds = runtime_values.__name__, runtime_bounds.__name__
+    return (_body(runtime_values) + "\n\n" + _body(runtime_bounds, (values,)) + "\n\n"
+            + _body(runtime, (values, bounds)))
 
 
-def _body(module: Any, inlined: str | None = None) -> str:
-    """``module``'s source without its docstring and ``__all__``; with ``inlined`` (a module
+def _body(module: Any, inlined: tuple[str, ...] | None = None) -> str:
+    """``module``'s source without its docstring and ``__all__``; with ``inlined`` (modules
     written before it into the same text) without its ``from __future__`` import and its
-    imports from ``inlined``."""
+    imports from them."""
     src = inspect.getsource(module)
     doc = module.__doc__ or ""
     start = src.index('"""' + doc[:40])
@@ -87,7 +93,7 @@ def _body(module: Any, inlined: str | None = None) -> str:
                                                 for t in node.targets):
             drop.append((node.lineno, node.end_lineno or node.lineno))
         if inlined is not None and isinstance(node, ast.ImportFrom) and (
-                node.module in ("__future__", inlined)):
+                node.module == "__future__" or node.module in inlined):
             drop.append((node.lineno, node.end_lineno or node.lineno))
     for first, last in sorted(drop, reverse=True):
         del lines[first - 1:last]

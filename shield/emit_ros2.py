@@ -54,6 +54,7 @@ from fretc.shield.build import Shield
 from fretc.shield.emit_python import render_python, tables
 from fretc.shield.messages import proposals_of
 from fretc.shield.plan import ShieldError
+from fretc.shield.runtime_values import term_variables
 from fretc.signals.bindings.spec import Bindings
 
 __all__ = ["render_ros2", "node_source", "node_margin", "latency_budget", "LATENCY_BUDGET"]
@@ -144,7 +145,10 @@ def _topics(shield: Shield, bindings: Bindings, proposals: dict[str, str]
             ) -> tuple[list[str], list[str]]:
     """(topics the inputs read, topics the outputs are published on)."""
     t = tables(shield)
-    read = {s[0] for m in t["machines"] for s in m["inputs"]}
+    read = {v for m in t["machines"] for s in m["inputs"]
+            for v in (term_variables(s[2]) if s[1] == "pred" else {s[0]})}
+    read |= {v for m in t["machines"] for b in m["bounds"]
+             for v in term_variables(m["outputs"][b["atom"]][2]) if v != b["variable"]}
     inputs = sorted({topic for v in read for topic in bindings.variables[v].topics})
     outputs = list(dict.fromkeys(topic for m in t["machines"] for g in m["groups"]
                                  for topic in g["topics"]))
@@ -175,8 +179,10 @@ def render_ros2(shield: Shield, base: str, bindings: Bindings | None,
         ShieldError: no binding file, a topic without a type in its ``[types]`` or with a
             type that does not exist (:func:`_check_types`), no proposal topic for an
             output topic, or comparisons of several output variables
-            (their corrected numbers have no message the bindings' inversion writes)."""
-    preds = [a.text for m in shield.machines for a in m.outputs if a.op == "pred"]
+            (their corrected numbers have no message the bindings' inversion writes; a
+            bound of one output by the inputs is written through the output's binding)."""
+    preds = [a.text for m in shield.machines for j, a in enumerate(m.outputs)
+             if a.op == "pred" and j not in {b["atom"] for b in m.bounds}]
     if preds:
         raise ShieldError("--emit ros2 cannot publish the outputs of " + ", ".join(preds)
                           + ": a comparison of several output variables is corrected by "

@@ -18,7 +18,10 @@ given; else **rest**, 0, whenever the valuation's truths allow it (a stopped act
 message the bindings solved for the valuation may read 0.009 m/s as "not moving" too, and
 was the fallback; the host's message is made from the decided values and checked, so 0 is
 published); else the number of the message the bindings give for the valuation, the
-recorded numbers of a cluster, or the number nearest 0 with the valuation's truths. When no
+recorded numbers of a cluster, or the number nearest 0 with the valuation's truths (an
+output bounded by the inputs, :mod:`fretc.check.bounds`: rest, 0, or the number nearest 0
+with its comparisons with constants; its bounds read the inputs, which such a tick cannot
+read, so its bounds' truths are the fallback's only where the inputs allow). When no
 valuation is robust there is no fallback (noted): the forms then give no outputs at such a tick (Python: an empty
 ``Decision.outputs``; C: ``-1``, the corrected outputs untouched; the ROS 2 node publishes
 nothing but ``/diagnostics``).
@@ -222,8 +225,11 @@ def _numbers(m: Machine, bits: list[int], declared: dict[str, Any], integers: Se
             if all(vals.get(t, bits[j]) == bool(bits[j]) for j, t in enumerate(texts)
                    if t in vals):
                 given.update(nums)
+    bounded = {b["variable"] for b in m.bounds}
     for v in m.output_variables:
         idx = [j for j, a in enumerate(m.outputs) if a.variable == v and a.op != "pred"]
+        if v in bounded and not idx and v not in declared:
+            out[v] = 0.0  # (rest: its bounds read the inputs, :mod:`fretc.shield.runtime_bounds`)
         if v in declared or v in out or not idx:
             continue
         if m.outputs[idx[0]].op is None:

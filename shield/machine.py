@@ -55,8 +55,9 @@ class Atom:
     comparison ``variable op constant`` (``op`` in ``< <= > >= = !=``, the variable on the
     left, the constant as a float of FRET's text), or a comparison of several variables
     (``op`` ``"pred"``, ``term`` its :func:`fretc.shield.predicates.term`, ``variable`` the
-    first it reads; :mod:`fretc.shield.predicates`). ``text``: its FRET/SMV text (the name
-    ``fretc check`` gives it)."""
+    first it reads, or for a bound, :mod:`fretc.check.bounds`, the output it bounds;
+    :mod:`fretc.shield.predicates`). ``text``: its FRET/SMV text (the name ``fretc check``
+    gives it)."""
 
     text: str
     variable: str
@@ -125,6 +126,13 @@ class Machine:
     #: of "it has held at every tick so far" (``H A``, :mod:`fretc.shield.plan`)
     assumptions: tuple[str, ...] = ()
     assumed: tuple[int, ...] = ()
+    #: the output atoms that bound an output by the inputs (:mod:`fretc.check.bounds`):
+    #: ``{"atom": output atom index, "variable": the output, "down": 1 when its true values
+    #: are a half-line downwards, "estimate": the bound's term over the inputs}``
+    #: (:mod:`fretc.shield.runtime_bounds`)
+    bounds: tuple[dict[str, Any], ...] = ()
+    #: the twists this machine corrects (``[shield] twists``: outputs scaled together)
+    twists: tuple[tuple[str, ...], ...] = ()
 
     @property
     def output_variables(self) -> list[str]:

@@ -7,6 +7,8 @@ requirements. Each tick:
 
 * the **inputs** are the input variables' bindings evaluated on the held messages (sample
   and hold, as the audit samples them: :class:`fretc.signals.bindings.compile.EvalState`);
+  an input bound to a proposal topic's field is the proposal's value
+  (``proposed_velocity = "/cmd_vel.linear.x"``), read from the controller's message;
 * the **proposal** is the output variables' bindings evaluated on the controller's latest
   message of each proposal topic, read as if it were on the corrected topic (``[shield]
   proposals`` of the binding file: corrected topic -> proposal topic; Safe-ROS:
@@ -15,7 +17,8 @@ requirements. Each tick:
 * the shield decides (:class:`fretc.shield.runtime.ShieldRuntime`), and each output topic
   gets a message: the proposal itself when none of its atoms changed, else the proposal
   with each numeric output set to its decided value through its binding (a field, ``-x``,
-  ``abs(x)`` with the proposal's sign) when that gives the decided atoms, else with the
+  ``abs(x)`` with the proposal's sign; an output bounded by the inputs and each output of a
+  twist too: their numbers are the runtime's) when that gives the decided atoms, else with the
   fields the bindings' inversion gives the corrected atoms
   (:mod:`fretc.shield.plan`, as ``fretc testgen --bindings`` writes tests); every message is
   read back through the bindings before it is published, and one that would not give the
@@ -120,6 +123,11 @@ class MessageShield:
         if missing:
             raise ShieldError("no binding for " + ", ".join(missing) + f" in {bindings.source}")
         self.groups = [(m, g) for m in runtime.machines for g in m.groups]
+        #: the proposal topics an input's binding reads (the proposal's value of an output
+        #: as an input: ``proposed_velocity = "/cmd_vel.linear.x"``): their messages are
+        #: held for the inputs too
+        self.proposal_inputs = {t for v in runtime.inputs if v in bindings.variables
+                                for t in bindings.variables[v].topics if t in self.by_proposal}
         self.output_topics = list(dict.fromkeys(t for _m, g in self.groups for t in g["topics"]))
         #: the messages of the last tick published (topic -> message)
         self.published: dict[str, Any] = {}
@@ -130,6 +138,12 @@ class MessageShield:
         self._inf_kept: dict[str, Callable[[EvalState], Any]] = {}
 
     def _read(self, v: str) -> bool:
+        """Whether the shield's machines read the variable ``v`` (an atom's, or a term's a
+        comparison of several variables or a bound reads)."""
+        ins, outs = (getattr(self.runtime, "input_kinds", None),
+                     getattr(self.runtime, "output_kinds", None))
+        if ins is not None and outs is not None:
+            return v in ins or v in outs
         return any(s[0] == v for m in self.runtime.machines for s in (*m.ins, *m.outs))
 
     def hear(self, topic: str, message: Any, time_ns: int) -> None:
@@ -138,7 +152,8 @@ class MessageShield:
         corrected = self.by_proposal.get(topic)
         if corrected is not None:
             self.proposed[corrected] = message
-            return
+            if topic not in self.proposal_inputs:
+                return
         if topic in self.state.msgs:
             self.state.prev_msgs[topic] = self.state.msgs[topic]
             self.state.prev_times[topic] = self.state.times[topic]
@@ -342,7 +357,9 @@ class MessageShield:
             # (a value the shield changed without an atom: a whole-number output's proposal
             # that was no whole number, runtime._Machine._whole)
             changed = fresh or any(m.texts[j] in d.changed for j in g["atoms"]) or any(
-                d.outputs.get(s[0]) != proposal.get(s[0]) for s in atoms if s[1] is not None)
+                d.outputs.get(s[0]) != proposal.get(s[0]) for s in atoms if s[1] is not None
+            ) or any(not _same(d.outputs.get(v), proposal.get(v))
+                     for v in g.get("decides", ()) if v in d.outputs)
             fields = g["fields"].get(key)
             for topic in g["topics"]:
                 base = self.make(topic) if fresh else props[topic]
@@ -381,7 +398,8 @@ class MessageShield:
         = linear.x``) the corrected one decides it; then the other orders (at most
         :data:`ORDER_TOPICS`! of them). The message must give the decided atoms
         (:meth:`_gives`), whichever order writes it."""
-        numeric = [v for v in dict.fromkeys(m.outs[j][0] for j in g["atoms"])
+        numeric = [v for v in dict.fromkeys([*(m.outs[j][0] for j in g["atoms"]),
+                                             *g.get("decides", ())])
                    if isinstance(d.outputs.get(v), (int, float))
                    and not isinstance(d.outputs.get(v), bool)]
         moved = {m.outs[j][0] for j in g["atoms"] if m.texts[j] in d.changed}
@@ -398,11 +416,14 @@ class MessageShield:
         changes what the decision changed and nothing else; None when a decided number has
         another binding."""
         msg = copy.deepcopy(base)
-        names = order if order is not None else dict.fromkeys(m.outs[j][0] for j in g["atoms"])
+        names = order if order is not None else dict.fromkeys(
+            [*(m.outs[j][0] for j in g["atoms"]), *g.get("decides", ())])
         for v in names:
             value = d.outputs.get(v)
             if isinstance(value, bool) or not isinstance(value, (int, float)):
                 continue
+            if v in g.get("decides", ()) and topic not in self.bindings.variables[v].topics:
+                continue  # (a bounded or twisted number of the group's other topic)
             if not _write_number(msg, topic, self.bindings.variables[v].ast, float(value)):
                 return None
         return msg

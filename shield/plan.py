@@ -23,8 +23,18 @@ the enforced ones into components, and the consistency of the outputs' atoms.
   an assumption relates one of its variables to an output (Safe-ROS's R5, ``clearance > 0``:
   the environment's assumptions say how the clearance answers the commands), else monitored.
 
+**Outputs bounded by the inputs** (a comparison of one output with a term over the inputs and
+constants, ``linear_velocity <= 0.5 * (front_dist - 0.3)``: :mod:`fretc.check.bounds`) are
+atoms of the controller, and which of their truth values numbers give at a tick is the
+environment's move: the order comparisons of their ends (inputs only) join the game's inputs,
+related to the other comparisons of the inputs by z3, and the controller's consistency says
+which truth values each order allows. Such an output may not be compared with ``=``/``!=``,
+with another output, or take whole numbers (refused, with the reason).
+
 Components (as ``fretc check``'s realizability: requirements sharing a variable) are joined
-further when the bindings bind their outputs to one topic: the shield corrects such outputs
+further when the bindings bind their outputs to one topic, and when the binding file names
+them one twist (``[shield] twists``: a linear and an angular speed scaled together, the path's
+curvature kept, as Nav2's collision monitor limits them): the shield corrects such outputs
 together. Their atoms' valuations that no single message gives (``forwarded_zero`` true with
 ``stopped`` false: both read ``/cmd_vel_filtered``) are excluded from the controller's moves,
 found by inverting the bindings as ``fretc testgen --bindings`` does
@@ -34,10 +44,11 @@ found by inverting the bindings as ``fretc testgen --bindings`` does
 from __future__ import annotations
 
 import itertools
-from collections.abc import Sequence
+from collections.abc import Collection, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
+from fretc.check.bounds import Bound, bounds_of, feasibility
 from fretc.check.items import CheckItem, make_item
 from fretc.check.numeric_abstraction import NumericAbstraction, simple_comparison
 from fretc.check.pt_monitor import Outside
@@ -113,6 +124,11 @@ class Component:
     #: names): the fallback keeps these whatever the environment does, so that it never
     #: relies on an assumption that broke (:mod:`fretc.shield.synthesis`)
     raw_pts: list[Node] = field(default_factory=list)
+    #: the comparisons of one output with a term over the inputs (module docstring), by
+    #: atom
+    bounds: dict[Node, Bound] = field(default_factory=dict)
+    #: the twists whose outputs this component corrects (``[shield] twists``)
+    twists: list[list[str]] = field(default_factory=list)
 
     @property
     def ids(self) -> list[str]:
@@ -137,17 +153,20 @@ class Plan:
 
 def plan(compiled: Sequence[Any], inputs: Sequence[str], outputs: Sequence[str],
          bindings: Bindings | None = None, integers: Sequence[str] = (),
-         assumptions: Sequence[Any] = ()) -> Plan:
+         assumptions: Sequence[Any] = (), twists: Sequence[Sequence[str]] = ()) -> Plan:
     """Sort ``compiled`` (:class:`fretc.compiler.build.Compiled`) into the plan of the module
     docstring, ``inputs``/``outputs`` the FRET variables of the environment / controller,
     ``integers`` the outputs that take whole numbers only (their comparisons' regions those
     a whole number lies in, :meth:`fretc.check.numeric_abstraction.NumericAbstraction.region`),
-    ``assumptions`` the environment's (compiled, module docstring).
+    ``assumptions`` the environment's (compiled, module docstring), ``twists`` the outputs
+    of each twist (checked by :func:`fretc.shield.twists.twists_of`).
 
     Raises:
         ShieldError: a requirement that cannot be enforced, a variable both input and
             output or neither, a requirement that did not formalize, an assumption that
-            is not a safety property or reads an output at the tick it is judged."""
+            is not a safety property or reads an output at the tick it is judged, an
+            output bounded by the inputs that is also compared with ``=``/``!=``, with
+            another output or takes whole numbers."""
     inputs, outputs = list(dict.fromkeys(inputs)), list(dict.fromkeys(outputs))
     both = sorted(set(inputs) & set(outputs))
     if both:
@@ -199,16 +218,28 @@ def plan(compiled: Sequence[Any], inputs: Sequence[str], outputs: Sequence[str],
     groups = _message_groups(outputs, bindings)
     whole = sorted(set(integers) & set(outputs))
     ids = {a.id for a in assumed}
+    turns = [list(t) for t in twists]
     components = []
-    for items in _components(enforced + assumed, groups):
+    for items in _components(enforced + assumed, groups + turns):
         reqs = [x for x in items if x.id not in ids]
         assume = [x for x in items if x.id in ids]
         if not reqs:
             notes.extend(f"assumption {a.id} shares no variable with an enforced requirement: "
                          "not used" for a in assume)
             continue
-        components.append(_component(reqs, inputs, groups, bindings, notes, whole, assume))
+        comp = _component(reqs, inputs, groups, bindings, notes, whole, assume, turns)
+        components.append(comp)
+    _twists_read(turns, components, notes)
     return Plan(inputs, outputs, components, monitored, notes, whole)
+
+
+def _twists_read(twists: list[list[str]], components: list[Component], notes: list[str]
+                 ) -> None:
+    """Note each twist no enforced requirement reads (its outputs pass through unchanged)."""
+    for t in twists:
+        if not any(t in c.twists for c in components):
+            notes.append(f"the twist {', '.join(t)}: no enforced requirement reads its "
+                         "outputs (passed through unchanged)")
 
 
 def _refuse_streams(c: Any, undeclared: Sequence[str]) -> None:
@@ -375,7 +406,8 @@ def _message_groups(outputs: list[str], bindings: Bindings | None) -> list[list[
 
 
 def _components(items: list[CheckItem], groups: list[list[str]]) -> list[list[CheckItem]]:
-    """Requirements grouped by shared variables and by outputs of one message, input order."""
+    """Requirements grouped by shared variables and by ``groups`` (outputs of one message,
+    of one twist), input order."""
     parent = list(range(len(items)))
 
     def find(i: int) -> int:
@@ -383,11 +415,22 @@ def _components(items: list[CheckItem], groups: list[list[str]]) -> list[list[Ch
             i = parent[i]
         return i
 
-    linked = {v: min(g) for g in groups if len(g) > 1 for v in g}
+    rep: dict[str, str] = {}  # (variables joined by a group: one representative)
+
+    def root(v: str) -> str:
+        while rep.get(v, v) != v:
+            v = rep[v]
+        return v
+
+    for g in groups:
+        for v in g[1:]:
+            x, y = root(g[0]), root(v)
+            if x != y:
+                rep[max(x, y)] = min(x, y)
     owner: dict[str, int] = {}
     for k, item in enumerate(items):
         for v in item.variables:
-            v = linked.get(v, v)
+            v = root(v)
             if v in owner:
                 a, b = find(owner[v]), find(k)
                 if a != b:
@@ -402,20 +445,32 @@ def _components(items: list[CheckItem], groups: list[list[str]]) -> list[list[Ch
 
 def _component(items: list[CheckItem], inputs: list[str], groups: list[list[str]],
                bindings: Bindings | None, notes: list[str], integers: Sequence[str] = (),
-               assumptions: Sequence[CheckItem] = ()) -> Component:
+               assumptions: Sequence[CheckItem] = (),
+               twists: Sequence[list[str]] = ()) -> Component:
     """A :class:`Component` with its invariants (module docstring), its game taking
-    ``assumptions``.
+    ``assumptions``; ``twists`` every twist (the component keeps those it corrects).
 
-    Raises :class:`fretc.shield.predicates.PredicateBudget` (a cluster too large)."""
+    Raises :class:`fretc.shield.predicates.PredicateBudget` (a cluster too large),
+    :class:`ShieldError` (a bounded output the shield cannot take, module docstring)."""
     pts = enforced_pts(items)
     apts = enforced_pts(list(assumptions))
-    numeric = NumericAbstraction.of(pts + apts)
+    bounds = bounds_of(pts + apts, inputs)
+    bounded = list(dict.fromkeys(b.output for b in bounds.values()))
+    plain = [_without_bounds(f, bounds) for f in pts + apts]
+    constants = NumericAbstraction.of(pts + apts).atoms
+    _refuse_bounded(items, bounded, constants, integers)
+    orders, feasible = feasibility(list(bounds.values()),
+                                   [a for v in bounded for a in constants.get(v, [])])
+    ordered = ir.and_all(*orders)
+    numeric = NumericAbstraction.of(pts + apts + [ordered])
     # (in doubles, as the shield's forms compute: a region with reals and no double in it
     # is no move of either player)
     env_inv = numeric.regions([v for v in numeric.atoms if v in inputs], doubles=True)
     ctl_inv = numeric.regions([v for v in numeric.atoms if v not in inputs], doubles=True,
                               integers=integers)
-    clusters = preds.clusters(pts + apts, inputs)
+    clusters = preds.clusters(plain + [ordered], inputs)
+    _refuse_clustered(items, bounded, clusters)
+    _refuse_clustered(items, [v for t in twists for v in t], clusters, "in a twist")
     for cl in clusters:
         for values, why in cl.unwitnessed.items():
             cube = " & ".join(to_smv(a) if v else f"!{to_smv(a)}"
@@ -429,12 +484,15 @@ def _component(items: list[CheckItem], inputs: list[str], groups: list[list[str]
                 names[a] = ir.ap(f"{preds.PREFIX}{len(names)}")
                 if cl.is_input:
                     game_inputs.append(ir.name_of(names[a]))
+    for a in bounds:  # (the controller's atoms)
+        names[a] = ir.ap(f"{preds.PREFIX}{len(names)}")
     for cl in clusters:
         inv = preds.substitute(cl.invariant, names)
         if cl.is_input:
             env_inv = ir.and_(env_inv, inv)
         else:
             ctl_inv = ir.and_(ctl_inv, inv)
+    ctl_inv = ir.and_(ctl_inv, preds.substitute(feasible, names))
     game_pts = [preds.substitute(f, names) for f in pts]
     raw_pts: list[Node] = []
     watch = [ir.H(preds.substitute(f, names)) for f in apts]
@@ -459,11 +517,66 @@ def _component(items: list[CheckItem], inputs: list[str], groups: list[list[str]
                 {t for v in g for t in bindings.variables[v].topics} if bindings else ()),
                 passed=[v for v in g if v not in used])
             mine = [a for a in atoms if _variable(a) in g]
-            ctl_inv = ir.and_(ctl_inv, _message_constraint(mine, bindings, notes, group))
-            _message_model(group, mine, bindings, clusters, notes)
+            ctl_inv = ir.and_(ctl_inv, _message_constraint(mine, bindings, notes, group,
+                                                           set(bounded) & set(g)))
+            _message_model(group, mine, bindings, clusters, notes, bounded)
             messages.append(group)
+    turns = [t for t in twists if set(t) & used]
     return Component(items, env_inv, ctl_inv, messages, clusters, names, game_pts,
-                     game_inputs, list(assumptions), watch, raw_pts)
+                     game_inputs, list(assumptions), watch, raw_pts, bounds, turns)
+
+
+def _without_bounds(f: Node, bounds: dict[Node, Bound]) -> Node:
+    """``f`` with each bound replaced by a boolean atom of its own (for the clusters: a
+    bound is no cluster's, module docstring)."""
+    if not bounds:
+        return f
+    return preds.substitute(f, {a: ir.ap(f"__bound_{k}") for k, a in enumerate(bounds)})
+
+
+def _reader(items: list[CheckItem], v: str) -> str:
+    """``ID (file:line)`` of the first of ``items`` reading ``v``."""
+    x = next((x for x in items if v in x.variables), items[0])
+    return f"{x.id} ({x.location})"
+
+
+def _refuse_bounded(items: list[CheckItem], bounded: list[str],
+                    constants: dict[str, list[Node]], integers: Sequence[str]) -> None:
+    """Refuse a bounded output (module docstring) compared with a constant by ``=`` or
+    ``!=`` (its truth values are no half-lines) or taking whole numbers.
+
+    Raises:
+        ShieldError: naming the requirement, the output and why."""
+    for v in bounded:
+        if v in integers:
+            raise ShieldError(f"{_reader(items, v)}: {v} takes whole numbers (FRET's export) "
+                              "and is bounded by the inputs: the shield gives a bounded output "
+                              "the real number nearest the proposal; declare it a real")
+        for a in constants.get(v, []):
+            sc = simple_comparison(a)
+            if sc is not None and sc[1] in ("=", "!="):
+                raise ShieldError(
+                    f"{_reader(items, v)}: {v} is bounded by the inputs and compared by "
+                    f"{to_smv(a)}: the truth values of = and != are no half-lines, which the "
+                    "shield's bounds need; write the equality as two comparisons (<= and >=)")
+
+
+def _refuse_clustered(items: list[CheckItem], bounded: list[str],
+                      clusters: list[preds.Cluster], what: str = "bounded by the inputs"
+                      ) -> None:
+    """Refuse an output ``bounded`` (bounded by the inputs, or ``what`` else: of a twist)
+    also compared with another output (a cluster's numbers and the bounds, or the twist's
+    scaling, would both set it).
+
+    Raises:
+        ShieldError: naming the requirement, the output and the comparisons."""
+    for cl in clusters:
+        both = [v for v in bounded if v in cl.variables and not cl.is_input]
+        if both:
+            raise ShieldError(
+                f"{_reader(items, both[0])}: {both[0]} is {what} and compared with other "
+                f"outputs ({', '.join(to_smv(a) for a in cl.atoms)}): the shield sets a "
+                "cluster's numbers together, from its own table; not supported")
 
 
 def enforced_pts(items: list[CheckItem]) -> list[Node]:
@@ -484,10 +597,15 @@ def _variable(atom: Node) -> str:
 
 
 def _message_constraint(atoms: list[Node], bindings: Bindings | None, notes: list[str],
-                        group: MessageGroup) -> Node:
+                        group: MessageGroup, bounded: Collection[str] = ()) -> Node:
     """The valuations of ``atoms`` (outputs bound to one topic) some message gives, as a
     propositional IR formula (the conjunction of the negated cubes of the others), each
-    given valuation kept in ``group``; TRUE when the bindings cannot be inverted (noted)."""
+    given valuation kept in ``group``; TRUE when the bindings cannot be inverted (noted).
+    A group of ``bounded`` outputs without such atoms has one valuation, the empty one (any
+    message: its numbers are the runtime's, written into the proposal's message)."""
+    if bindings is not None and not atoms and bounded:
+        group.valuations.append(({}, {}, {}))
+        return ir.TRUE
     if bindings is None or not atoms:
         return ir.TRUE
     names = ", ".join(to_smv(a) for a in atoms)
@@ -523,7 +641,8 @@ def _message_constraint(atoms: list[Node], bindings: Bindings | None, notes: lis
 
 
 def _message_model(group: MessageGroup, atoms: list[Node], bindings: Bindings | None,
-                   clusters: list[preds.Cluster], notes: list[str]) -> None:
+                   clusters: list[preds.Cluster], notes: list[str],
+                   bounded: Sequence[str] = ()) -> None:
     """Give ``group`` (its valuations solved) its model (:mod:`fretc.shield.message_model`),
     or note why the forms cannot make its decided values one message."""
     if bindings is None or not group.valuations:
@@ -536,6 +655,7 @@ def _message_model(group: MessageGroup, atoms: list[Node], bindings: Bindings | 
                      "variables")
         return
     kinds = {_variable(a): ("b" if a.op == "ap" else "n") for a in atoms}
+    kinds.update({v: "n" for v in bounded if v in group.variables})
     specs: dict[str, tuple[str, str | None, Any]] = {}
     for a in atoms:
         sc = simple_comparison(a)

@@ -10,9 +10,12 @@ invariant joins the game's ``ctl_inv`` (outputs) or ``env_inv`` (inputs).
 
 An output cluster's recorded numbers are what the shield outputs for the cluster's
 variables when it changes the truth of one of its atoms (the proposal's numbers give the
-proposed truths, not the corrected ones). Refused (:class:`fretc.shield.plan.ShieldError`):
-a comparison that reads both an input and an output (which truths the shield can give
-depends on the input's number, which the game does not see), a past value of a number
+proposed truths, not the corrected ones). A comparison of one output with a term over the
+inputs (a bound, ``v <= 0.5 * (d - 0.3)``: :mod:`fretc.check.bounds`) is no cluster's: its
+feasibility is the environment's move (:mod:`fretc.shield.plan`). Refused
+(:class:`fretc.shield.plan.ShieldError`): a comparison of inputs and outputs that is no bound
+(several outputs, ``=``/``!=``, the output under a function or with a factor that reads the
+inputs: :func:`fretc.check.bounds.classify` says which), a past value of a number
 (``preReal``: the game keeps no number from one tick to the next), a function other than
 ``absReal/absInt/minReal/minInt/maxReal/maxInt``.
 """
@@ -23,6 +26,7 @@ from collections.abc import Sequence
 from fractions import Fraction
 from typing import Any
 
+from fretc.check.bounds import classify
 from fretc.check.predicates import (MAX_VALUATIONS, Cluster, NoWitness, PredicateBudget,
                                     is_predicate, undecidable)
 from fretc.check import predicates as _check
@@ -47,13 +51,8 @@ def refusal(node: Node, inputs: Sequence[str]) -> str | None:
     why = undecidable(node)
     if why is not None:
         return why.replace("z3 is not given", "the shield does not evaluate")
-    names = {ir.name_of(n) for n in ir.walk(node) if n.op == "var"}
-    ins = sorted(v for v in names if v in inputs)
-    if ins and len(ins) < len(names):
-        return (f"{to_smv(node)} compares the input(s) {', '.join(ins)} with the output(s) "
-                f"{', '.join(sorted(names - set(ins)))}: which truth values the shield can "
-                "give it depends on the inputs' numbers, which its game does not see")
-    return None
+    got = classify(node, inputs)
+    return got if isinstance(got, str) else None
 
 
 def term(n: Node) -> tuple[Any, ...]:
@@ -77,7 +76,8 @@ def term(n: Node) -> tuple[Any, ...]:
 
 def clusters(pts: Sequence[Node], inputs: Sequence[str]) -> list[Cluster]:
     """The clusters of the atoms of ``pts`` (:func:`fretc.check.predicates.clusters`), each
-    decided by z3, with the numbers of every realizable valuation as doubles.
+    decided by z3, with the numbers of every realizable valuation as doubles; ``pts`` without
+    bounds (the caller takes them out: :mod:`fretc.shield.plan`).
 
     Raises:
         PredicateBudget: a cluster past :data:`MAX_VALUATIONS`.

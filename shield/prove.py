@@ -34,6 +34,12 @@ answers are never "holds" (a hostile finding: ``A1: environment shall always sat
   every case it speaks of (``A5: always !a`` for ``whenever a ... immediately o``).
 
 Either is "NOT PROVED" (exit 1), with the reason.
+
+**Outputs bounded by the inputs** (:mod:`fretc.check.bounds`) are atoms the closed loop sets
+as the machine decides them; that a number gives the decided atoms at each tick is the
+runtime's part, which the proof assumes and states (``Proof.choice``, printed): the forms
+clamp the proposal between the decided comparisons' thresholds
+(:mod:`fretc.shield.runtime_bounds`) and report the ticks where no finite number meets them.
 """
 
 from __future__ import annotations
@@ -70,6 +76,9 @@ class Proof:
     monitored: dict[str, str] = field(default_factory=dict)
     #: requirement id -> the assumptions it is proved under (none: any environment)
     under: dict[str, tuple[str, ...]] = field(default_factory=dict)
+    #: what the proof assumes of the runtime's choice of numbers at each tick (outputs
+    #: bounded by the inputs: :mod:`fretc.shield.runtime_bounds`), one line each
+    choice: list[str] = field(default_factory=list)
 
     @property
     def holds(self) -> bool:
@@ -92,6 +101,7 @@ class Proof:
                          + (f" ({self.why[rid]})" if rid in self.why else ""))
         for b in self.blocking:
             lines.append(f"  BLOCKS: {b}")
+        lines += [f"  assumes of the runtime's choice: {c}" for c in self.choice]
         for rid, why in self.monitored.items():
             lines.append(f"  {rid}: monitored only, not proved ({why})")
         lines.append(("the shield satisfies every enforced requirement"
@@ -237,6 +247,17 @@ def prove_shield(shield: Shield, compiled: Sequence[Any]) -> Proof:
     by_id = {c.id: c for c in compiled}
     proof = Proof(monitored=dict(shield.monitored))
     for m in shield.machines:
+        for v in dict.fromkeys(b["variable"] for b in m.bounds):
+            mine = [m.outputs[j].text for j, a in enumerate(m.outputs) if a.variable == v]
+            proof.choice.append(
+                f"each tick {v} takes a number that gives every comparison the machine "
+                f"decided of {', '.join(mine)} (the machine chooses only truth values whose "
+                "half-lines meet, by the order of their bounds at that tick, the "
+                "environment's move); the forms clamp the proposal between the comparisons' "
+                "thresholds in doubles, and a tick where no finite number gives them (a "
+                "bound of -inf or NaN, an input a bound reads that cannot be read) is a "
+                "fault they report (Decision.fault, the C state's fault 4), the proof's "
+                "assumption broken there")
         ids = ", ".join(m.requirements)
         loop = closed_loop(m, assumed=bool(m.assumed))  # (the runs A & !R can have)
         if loop is None:

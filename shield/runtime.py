@@ -60,6 +60,11 @@ infinite number (no actuator takes one) cannot be read. Then:
   (the state moves); without a fallback their atoms are left to the correction (any value
   of theirs costs nothing). ``Decision.fault`` says which and why; ``overridden`` is true.
 
+**Outputs bounded by the inputs and twists** (a machine's ``"bounds"`` and ``"twists"``):
+the number of a bounded output and the scaling of a twist are
+:mod:`fretc.shield.runtime_bounds`' (``Decision.fault`` names a bound no finite number met,
+``Decision.scaled`` each twist scaled); an input a bound reads is an input the machine reads.
+
 **Assumptions of the environment** (``fretc shield --assume``): a machine's ``"assumptions"``
 (ids) and ``"assumed"`` (per assumption the root of "it has held at every tick so far") are
 read after each decision. Once one has not held, the machine's guarantee no longer holds
@@ -71,11 +76,12 @@ fallback), the state moving as usual.
 from __future__ import annotations
 
 import math
-import numbers
 from typing import Any, NamedTuple
 
-from fretc.shield.runtime_values import (_OPS, as_message, kinds, nearest, term_value,
-                                         term_variables, truth)
+from fretc.shield.runtime_bounds import bounded_value, scaled
+from fretc.shield.runtime_values import (_OPS, Unreadable, _checked, as_message, kinds,
+                                         nearest, read_value, term_value, term_variables,
+                                         truth)
 
 __all__ = ["Decision", "ShieldRuntime", "CACHE_LIMIT", "BELIEF_LIMIT", "CASES_LIMIT", "truth",
            "nearest", "term_value", "Unreadable", "read_value"]
@@ -118,80 +124,9 @@ class Decision(NamedTuple):
     #: the requirements of the machines that no longer know their state (module
     #: docstring): their outputs are the fallback's (none without one) until reset
     lost: tuple[str, ...] = ()
-
-
-class Unreadable(ValueError):
-    """A value the shield cannot read (module docstring); the message says which and why."""
-
-
-def _shown(value: Any) -> str:
-    text = repr(value)
-    return text if len(text) <= 40 else text[:37] + "..."
-
-
-def read_value(var: str, kind: str, values: dict[str, Any], proposal: bool = False) -> Any:
-    """``values[var]`` checked for a variable read as ``kind`` (``"b"`` a boolean, ``"n"``
-    a number; module docstring): a bool, or a float.
-
-    Raises:
-        Unreadable: missing, of the wrong type, NaN, too large for a double, (a
-            ``proposal``) infinite, or an exception (a host's reading that failed, e.g. an
-            :class:`Unreadable`: its message is the reason)."""
-    try:
-        value = values[var]
-    except KeyError:
-        raise Unreadable(f"{var} is missing") from None
-    if isinstance(value, Exception):  # (a host's reading that failed, with its reason; an
-        # Unreadable of another copy of this module, e.g. a generated shield's, is one too)
-        raise Unreadable(str(value))
-    t = type(value)
-    if t is float and kind == "n":  # (the common cases first: a step reads many values)
-        if value != value:
-            raise Unreadable(f"{var} is NaN")
-        if proposal and (value == math.inf or value == -math.inf):
-            raise Unreadable(f"{var} is {value}: no actuator takes an infinite value")
-        return value
-    if t is bool and kind == "b":
-        return value
-    if kind == "b":
-        if value is True or value is False:
-            return value
-        if type(value).__name__ == "bool_":  # (numpy's, from a message's array)
-            return bool(value)
-        if isinstance(value, numbers.Integral) and value in (0, 1):
-            return bool(value)
-        raise Unreadable(f"{var} must be a boolean, not {_shown(value)}")
-    if isinstance(value, bool) or not isinstance(value, numbers.Real) \
-            or type(value).__name__ == "bool_":
-        raise Unreadable(f"{var} must be a number, not {_shown(value)}")
-    try:
-        x = float(value)
-    except (OverflowError, ValueError, TypeError):
-        raise Unreadable(f"{var} is {_shown(value)}, which no double holds") from None
-    if x != x:
-        raise Unreadable(f"{var} is NaN")
-    if proposal and math.isinf(x):
-        raise Unreadable(f"{var} is {x}: no actuator takes an infinite value")
-    return x
-
-
-def _checked(kinds_of: dict[str, str], values: dict[str, Any], proposal: bool
-             ) -> dict[str, Any]:
-    """Every variable of ``kinds_of`` (variable -> kind) read from ``values`` as
-    :func:`read_value` reads it (a bool, or a finite float: taken as they are; anything
-    else through :func:`read_value`).
-
-    Raises:
-        Unreadable: as :func:`read_value`."""
-    out = {}
-    for v, k in kinds_of.items():
-        x = values.get(v, values)  # (``values`` itself: no variable's value)
-        t = type(x)
-        if (t is bool and k == "b") or (t is float and k == "n" and x - x == 0.0):
-            out[v] = x
-        else:
-            out[v] = read_value(v, k, values, proposal)
-    return out
+    #: the twists scaled together at this tick, each with its factor (the path's curvature
+    #: kept: :mod:`fretc.shield.runtime_bounds`)
+    scaled: tuple[str, ...] = ()
 
 
 def _tester(spec: tuple[str, str | None, Any]) -> Any:
@@ -232,7 +167,8 @@ def _walk(nodes: list[tuple[int, int, int]], root: int, values: list[int]) -> in
 class _Machine:
     """One component's tables and state (module docstring)."""
 
-    def __init__(self, t: dict[str, Any], preferences: int):
+    def __init__(self, t: dict[str, Any], preferences: int,
+                 fallback: dict[str, Any] | None = None):
         self.reqs = tuple(t["requirements"])
         self.ins, self.outs, self.texts = t["inputs"], t["outputs"], t["texts"]
         self.nodes, self.safe = t["nodes"], t["safe"]
@@ -260,9 +196,28 @@ class _Machine:
         self.out_tests = [_tester(s) for s in self.outs]
         self.clusters = t.get("clusters", [])
         clustered = {v for c in self.clusters for v in c["variables"]}
+        #: the bounds (:mod:`fretc.shield.runtime_bounds`): output atom -> (down, estimate)
+        self.bounds = {b["atom"]: (b["down"], b["estimate"]) for b in t.get("bounds", ())}
+        bounded = {self.outs[j][0] for j in self.bounds}
+        #: each bounded output's atoms, and the inputs each bound reads
+        self.bound_atoms = {v: [j for j, s in enumerate(self.outs) if s[0] == v]
+                            for v in self.variables if v in bounded}
+        self.bound_reads = {j: term_variables(self.outs[j][2]) - {self.outs[j][0]}
+                            for j in self.bounds}
         self.atoms_of = {v: [j for j, s in enumerate(self.outs) if s[0] == v]
-                         for v in self.variables if v not in clustered}
-        self.in_kinds, self.out_kinds = kinds(self.ins), kinds(self.outs)
+                         for v in self.variables if v not in clustered and v not in bounded}
+        self.in_kinds = kinds(self.ins)
+        for j in self.bounds:
+            self.in_kinds.update({v: "n" for v in sorted(self.bound_reads[j])
+                                  if v not in self.in_kinds})
+        self.out_kinds = kinds([(s[0], "<=", 0.0) if j in self.bounds else s
+                                for j, s in enumerate(self.outs)])
+        #: the twists it scales, and the fallback's numbers (a bound's number nearest them)
+        self.twists = [tuple(x) for x in t.get("twists", ())]
+        self.fallback_numbers = dict((fallback or {}).get("outputs", {}))
+        #: what the last decision noted: bounds no number met (``fault``), twists scaled
+        self.faults: list[str] = []
+        self.scaled: list[str] = []
         self.env_ok = t.get("env_ok", 1)
         #: the other states the machine may be in after a tick with an unreadable input
         #: (module docstring: its belief is ``state`` and these, sorted); ``lost``: past the
@@ -279,6 +234,11 @@ class _Machine:
         self.reading = {v: [j for j, s in enumerate(self.outs)
                             if (v in term_variables(s[2]) if s[1] == "pred" else s[0] == v)]
                         for v in self.out_kinds}
+
+    def _both(self, inputs: dict[str, Any], outputs: dict[str, Any]) -> dict[str, Any]:
+        """The values the output atoms read: the outputs', and the inputs' too when a bound
+        reads them."""
+        return {**inputs, **outputs} if self.bounds else outputs
 
     def move(self, ins: tuple[int, ...], outs: tuple[int, ...],
              state: tuple[int, ...] | None = None) -> tuple[bool, tuple[int, ...]]:
@@ -358,14 +318,17 @@ class _Machine:
         variable the machine reads but the output variables ``unknown`` (proposals that
         could not be read: their atoms are left to the correction and always changed);
         ``replaced`` the proposals replaced (their message is not written)."""
+        self.faults, self.scaled = [], []
         ins = tuple([f(inputs) for f in self.in_tests])
         if unknown:
             unk = frozenset(j for v in unknown for j in self.reading.get(v, ()))
             if unk:
-                decided, why, what, nxt, gone, outs = self._unknown(ins, proposed, unk)
+                decided, why, what, nxt, gone, outs = self._unknown(ins, proposed, unk,
+                                                                     inputs)
                 return (self._one_message(decided, outs, proposed, replaced), why, what, nxt,
                         gone)
-        prop = tuple([f(proposed) for f in self.out_tests])
+        both = self._both(inputs, proposed)
+        prop = tuple([f(both) for f in self.out_tests])
         safe, nxt = self.move(ins, prop)
         if safe:
             kept = self._whole(proposed, prop) if self.integers else {}
@@ -386,7 +349,8 @@ class _Machine:
             got = self.corrections[key] = (outs, (reasons if changed else ()), changed,
                                            self._plan(outs, changed))
         outs, reasons, changed, plan = got
-        return (self._one_message(self._values(plan, proposed), outs, proposed, replaced),
+        decided = self._twist(self._values(plan, proposed, inputs), proposed, outs, inputs)
+        return (self._one_message(decided, outs, proposed, replaced),
                 reasons, changed, self.move(ins, outs)[1], self._broken(ins, outs))
 
     def _one_message(self, values: dict[str, Any], outs: tuple[int, ...],
@@ -394,10 +358,12 @@ class _Machine:
         """``values`` (the decided outputs, a variable missing there keeping its proposal)
         with each message group's made one message (module docstring, :func:`as_message`):
         ``outs`` the decided atoms, ``replaced`` the proposals replaced this tick."""
+        twist = {v for t in self.twists for v in t}
         for model, own in self.models:
             decided = {v: values.get(v, proposed.get(v)) for v in own}
+            twisted = {v: values.get(v, proposed.get(v)) for v in model["passed"] if v in twist}
             got = as_message(model, outs, self.outs, decided, proposed,
-                             any(v in replaced for v in own))
+                             any(v in replaced for v in own), twisted)
             if got:
                 values = {**values, **got}
         return values
@@ -445,14 +411,17 @@ class _Machine:
         sorted, None when the machine no longer knows its state (``why`` then says why and
         the outputs are the fallback's, none without one); ``broken`` the assumptions broken
         in every case."""
+        self.faults, self.scaled = [], []
         if self.lost:
             return self._lost(fallback, proposed, "its state is unknown since an earlier "
                               "tick (reset the shield)")
         cases = [(st, i) for i in self.input_cases(inputs, unread) for st in self.belief]
         if len(cases) > CASES_LIMIT:
             return self._lost(fallback, proposed, f"more than {CASES_LIMIT} cases to decide")
-        unk = frozenset(j for v in unknown for j in self.reading.get(v, ()))
-        prop = tuple([0 if j in unk else f(proposed) for j, f in enumerate(self.out_tests)])
+        unk = frozenset([*(j for v in unknown for j in self.reading.get(v, ())),
+                         *(j for j, reads in self.bound_reads.items() if reads & unread)])
+        both = self._both(inputs, proposed)
+        prop = tuple([0 if j in unk else f(both) for j, f in enumerate(self.out_tests)])
 
         def safe_in_all(outs: tuple[int, ...]) -> bool:
             return all(self.move(i, outs, st)[0] for st, i in cases)
@@ -484,7 +453,8 @@ class _Machine:
                 if not reasons and all(_walk(self.nodes, self.ctl_ok, list(i + prop + st)) == 1
                                        for st, i in cases):
                     reasons = self.reqs  # (no requirement alone: the machine's together)
-            values = self._values(self._plan(outs, changed), proposed)
+            values = self._twist(self._values(self._plan(outs, changed), proposed, inputs),
+                                 proposed, outs, inputs)
         values = self._one_message(values, outs, proposed, replaced)
         nexts = sorted({self.move(i, outs, st)[1] for st, i in cases})
         if len(nexts) > BELIEF_LIMIT:
@@ -528,34 +498,68 @@ class _Machine:
         return tuple(a for a, r in zip(self.assume_ids, self.assumed)
                      if _walk(self.nodes, r, values) != 1)
 
-    def _unknown(self, ins: tuple[int, ...], proposed: dict[str, Any], unk: frozenset[int]
+    def _unknown(self, ins: tuple[int, ...], proposed: dict[str, Any], unk: frozenset[int],
+                 inputs: dict[str, Any]
                  ) -> tuple[dict[str, Any], tuple[str, ...], tuple[str, ...], tuple[int, ...],
                             tuple[str, ...], tuple[int, ...]]:
         """:meth:`decide` when the output atoms ``unk`` read a proposal that could not be
         read: the safe outputs nearest the rest of the proposal, every atom of ``unk``
         counted changed (its variable's value is never the proposal's); no reason (the
         fault is the proposal's); and the decided atoms."""
-        prop = tuple([0 if j in unk else f(proposed) for j, f in enumerate(self.out_tests)])
+        both = self._both(inputs, proposed)
+        prop = tuple([0 if j in unk else f(both) for j, f in enumerate(self.out_tests)])
         outs = self.correct(ins, prop, unk)
         changed = tuple(t for j, (t, p, o) in enumerate(zip(self.texts, prop, outs))
                         if p != o or j in unk)
         plan = self._plan(outs, changed)
-        return (self._values(plan, proposed), (), changed, self.move(ins, outs)[1],
+        return (self._values(plan, proposed, inputs), (), changed, self.move(ins, outs)[1],
                 self._broken(ins, outs), outs)
 
     def _values(self, plan: tuple[dict[str, Any], list[str], list[tuple[Any, ...]]],
-                proposed: dict[str, Any]) -> dict[str, Any]:
+                proposed: dict[str, Any], inputs: dict[str, Any]) -> dict[str, Any]:
         """The output values of a correction's :meth:`_plan` for the proposal ``proposed``
         (a variable missing there, a proposal that could not be read, takes the number
-        nearest NaN: its region's end)."""
+        nearest NaN: its region's end) and the tick's readable ``inputs`` (the bounds'
+        numbers, :func:`fretc.shield.runtime_bounds.bounded_value`; a bound no number meets
+        noted in :attr:`faults`)."""
         fixed, kept, near = plan
         result = dict(fixed)
         for v in kept:
             result[v] = proposed[v]
         for v, specs, truths in near:
+            if specs is None:  # (a bounded output)
+                idx = self.bound_atoms[v]
+                result[v], why = bounded_value(
+                    [self.outs[j] for j in idx], truths, [self.bounds.get(j) for j in idx],
+                    float(proposed.get(v, math.nan)), inputs,
+                    float(self.fallback_numbers.get(v, 0.0)))
+                if why:
+                    self.faults.append(f"bound {why}")
+                continue
             result[v] = nearest(specs, truths, float(proposed.get(v, math.nan)),
                                 v in self.integers)
         return result
+
+    def _twist(self, values: dict[str, Any], proposed: dict[str, Any], outs: tuple[int, ...],
+               inputs: dict[str, Any]) -> dict[str, Any]:
+        """``values`` with each twist scaled as one where the decided atoms ``outs`` still
+        hold (:func:`fretc.shield.runtime_bounds.scaled`), noted in :attr:`scaled`."""
+        for names in self.twists:
+            got = scaled(names, {v: values.get(v, proposed.get(v)) for v in names}, proposed)
+            if got is None:
+                continue
+            trial = {**inputs, **proposed, **values, **got[0]}
+            try:
+                keeps = all(bool(self.out_tests[j](trial)) == bool(outs[j])
+                            for j in {j for v in names for j in self.reading.get(v, ())})
+            except (KeyError, ValueError, TypeError):  # (an input a bound reads unread)
+                keeps = False
+            moved = any(got[0][v] != values.get(v, proposed.get(v)) for v in names)
+            if keeps and moved:
+                values = {**values, **got[0]}
+                self.scaled.append(f"{', '.join(names)} scaled by {got[1]!r} together (the "
+                                   "curvature kept)")
+        return values
 
     def _whole(self, proposed: dict[str, Any], prop: tuple[int, ...]) -> dict[str, float]:
         """The whole-number outputs of a proposal kept whole: one that is no whole number
@@ -595,6 +599,8 @@ class _Machine:
             if any(self.texts[j] in changed and self.outs[j][1] is None for j in g["atoms"]):
                 key = sum(int(outs[j]) << k for k, j in enumerate(g["atoms"]))
                 fixed.update(g["numbers"].get(key, {}))
+        for v, idx in self.bound_atoms.items():
+            near.append((v, None, [outs[j] for j in idx]))
         for v, idx in self.atoms_of.items():
             if self.outs[idx[0]][1] is None:
                 result[v] = bool(outs[idx[0]])
@@ -617,9 +623,9 @@ class ShieldRuntime:
         self.inputs = tuple(tables["inputs"])
         self.outputs = tuple(tables["outputs"])
         prefs = len(tables.get("preferences", ()))
-        self.machines = [_Machine(t, prefs) for t in tables["machines"]]
         #: the fallback (module docstring), None when the shield has none
         self.fallback: dict[str, Any] | None = tables.get("fallback")
+        self.machines = [_Machine(t, prefs, self.fallback) for t in tables["machines"]]
         self.input_kinds: dict[str, str] = {}
         self.output_kinds: dict[str, str] = {}
         for m in self.machines:
@@ -634,11 +640,19 @@ class ShieldRuntime:
         self.mates: dict[str, tuple[str, ...]] = {}
         for m in self.machines:
             for g in m.groups:
-                group = tuple(dict.fromkeys(m.outs[j][0] for j in g["atoms"]))
+                group = tuple(dict.fromkeys([*(m.outs[j][0] for j in g["atoms"]),
+                                             *g.get("decides", ())]))
                 self.mates.update({v: group for v in group})
         #: the outputs no machine reads that a message group's model writes (module
-        #: docstring): their proposals go to the machines
-        self.written = [v for m in self.machines for v in m.passed]
+        #: docstring) or a twist scales: their proposals go to the machines
+        self.written = list(dict.fromkeys(
+            [*(v for m in self.machines for v in m.passed),
+             *(v for m in self.machines for t in m.twists for v in t
+               if v not in self.output_kinds)]))
+        #: the outputs no machine reads that a twist scales: a proposal of theirs that is
+        #: given is checked as a proposal (a NaN or infinite one replaced with its message)
+        self.twisted = [v for m in self.machines for t in m.twists for v in t
+                        if v not in self.output_kinds]
 
     def reset(self) -> None:
         """Back to the initial state (before the first tick)."""
@@ -678,7 +692,8 @@ class ShieldRuntime:
         ins, unread = self._readable(inputs)
         outs = {v: read_value(v, k, outputs, True) for v, k in self.output_kinds.items()}
         for m, held in zip(self.machines, state):
-            out_bits = [f(outs) for f in m.out_tests]
+            both = m._both(ins, outs)
+            out_bits = [f(both) for f in m.out_tests]
             bits: tuple[Any, ...] = tuple(held)
             if bits and bits[0] == "lost":
                 continue  # (the fallback's outputs: any order)
@@ -705,6 +720,8 @@ class ShieldRuntime:
             ins, unread = self._readable(inputs)
         try:  # (the common case: every proposal readable)
             props = _checked(self.output_kinds, proposed, True)
+            if self.twisted:
+                _checked({v: "n" for v in self.twisted if v in proposed}, proposed, True)
             faults: list[str] = []
             replaced: list[str] = []
             frozen: frozenset[str] = frozenset()
@@ -740,8 +757,10 @@ class ShieldRuntime:
                             tuple(broken))
         if len(outputs) != len(self.outputs):  # (a missing output no machine reads)
             outputs = {v: outputs[v] for v in self.outputs if v in outputs}
+        faults += [n for m in self.machines for n in m.faults]
         return Decision(outputs, bool(changed) or bool(faults), tuple(reasons),
-                        tuple(changed), "; ".join(faults))
+                        tuple(changed), "; ".join(faults),
+                        scaled=tuple(n for m in self.machines for n in m.scaled))
 
     def _readable(self, inputs: dict[str, Any]) -> tuple[dict[str, Any], dict[str, str]]:
         """The input values that can be read (:func:`read_value`), and each other input
@@ -798,8 +817,10 @@ class ShieldRuntime:
         if silent:
             return Decision({}, True, tuple(reasons), tuple(changed), fault, (), lost)
         outputs = {v: outputs[v] for v in self.outputs if v in outputs}
-        return Decision(outputs, bool(changed) or bool(faults), tuple(reasons),
-                        tuple(changed), fault, (), lost)
+        bound = [n for m in self.machines for n in m.faults]
+        return Decision(outputs, bool(changed) or bool(faults) or bool(bound), tuple(reasons),
+                        tuple(changed), "; ".join([fault, *bound]) if fault else "; ".join(bound),
+                        (), lost, tuple(n for m in self.machines for n in m.scaled))
 
     def _replaced(self, proposed: dict[str, Any]
                   ) -> tuple[dict[str, Any], list[str], list[str], frozenset[str]]:
@@ -812,7 +833,8 @@ class ShieldRuntime:
         faults: list[str] = []
         bad: set[str] = set()
         fallback = self.fallback["outputs"] if self.fallback is not None else {}
-        for v, k in self.output_kinds.items():
+        checked = {**self.output_kinds, **{v: "n" for v in self.twisted if v in proposed}}
+        for v, k in checked.items():
             try:
                 props[v] = read_value(v, k, proposed, True)
             except Unreadable as exc:
@@ -826,6 +848,9 @@ class ShieldRuntime:
             else:
                 props.pop(v, None)
                 unknown.add(v)
+        for v in self.twisted:  # (a twist's output no requirement reads: the fallback's, or rest)
+            if v in bad or any(w in bad for w in self.mates.get(v, ())):
+                props[v] = float(fallback.get(v, 0.0))
         return props, faults, replaced, frozenset(unknown)
 
     def fault(self, why: str, proposed: dict[str, Any]) -> Decision:

@@ -1,23 +1,26 @@
 """The values of a shield's atoms, standard library only: an atom's truth for a variable's
 value, the comparisons of several variables and their terms (:mod:`fretc.shield.predicates`),
 the kinds of the variables atoms read, the number nearest a proposal that gives a
-valuation of a variable's comparisons (the corrected numbers), and the decided values of a
-message group made one message (:func:`as_message`, :mod:`fretc.shield.message_model`).
+valuation of a variable's comparisons (the corrected numbers), the decided values of a
+message group made one message (:func:`as_message`, :mod:`fretc.shield.message_model`), and
+each value a step reads checked (:func:`read_value`).
 
 Part of the shield's step (:mod:`fretc.shield.runtime`): ``fretc shield --emit python``
-writes this module's source, then the runtime's, into the generated module
-(:func:`fretc.shield.emit_python.render_python`), so it imports nothing of fretc's.
+writes this module's source, then :mod:`fretc.shield.runtime_bounds`' and the runtime's,
+into the generated module (:func:`fretc.shield.emit_python.render_python`), so it imports
+nothing of fretc's.
 """
 
 from __future__ import annotations
 
 import itertools
 import math
+import numbers
 from collections.abc import Callable
 from typing import Any
 
 __all__ = ["truth", "term_value", "term_variables", "kinds", "nearest", "message_value",
-           "as_message", "MESSAGE_ORDERS"]
+           "as_message", "MESSAGE_ORDERS", "Unreadable", "read_value"]
 
 #: the most numbers of one message whose write orders are all tried (their permutations);
 #: past it, only the first order (:func:`as_message`)
@@ -219,15 +222,17 @@ def _same(a: Any, b: Any) -> bool:
 
 
 def as_message(model: dict[str, Any], bits: tuple[int, ...], specs: list[Any],
-               decided: dict[str, Any], proposed: dict[str, Any], fresh: bool = False
-               ) -> dict[str, Any]:
+               decided: dict[str, Any], proposed: dict[str, Any], fresh: bool = False,
+               twisted: dict[str, Any] | None = None) -> dict[str, Any]:
     """The values of one message group as one message gives them (KP-124,
     :mod:`fretc.shield.message_model`): ``model`` the group's table, ``bits`` the machine's
     decided output atoms (``specs`` theirs), ``decided`` the decided value of each of the
     group's variables the requirements read, ``proposed`` the proposal (the raw values of
     the ``passed`` ones; ``fresh``: the proposal's message could not be read, so none of its
-    values is written). Returns the values to use (empty: the decided ones are the
-    proposal's message, or no message was found, which the tables exclude).
+    values is written; ``twisted``: the values the shield decided of ``passed`` ones a twist
+    scales, written in their proposals' place, fresh or not). Returns the values to use
+    (empty: the decided ones are the proposal's message, or no message was found, which the
+    tables exclude).
 
     The message: the witness of the decided valuation with each number of ``writes``
     written through its binding, those the decision kept first (so the corrected ones decide
@@ -263,8 +268,11 @@ def as_message(model: dict[str, Any], bits: tuple[int, ...], specs: list[Any],
         return {}
     for v in model["passed"]:
         x = proposed.get(v)
-        if fresh or isinstance(x, bool) or not isinstance(x, (int, float)) \
-                or not math.isfinite(x):
+        if twisted and v in twisted:
+            x = twisted[v]
+        elif fresh:
+            continue
+        if isinstance(x, bool) or not isinstance(x, (int, float)) or not math.isfinite(x):
             continue
         trial = list(msg)
         if _message_write(terms[v], trial, float(x)) and all(
@@ -273,3 +281,79 @@ def as_message(model: dict[str, Any], bits: tuple[int, ...], specs: list[Any],
     got.update({v: _read_as(k, terms[v], msg) for v, k, _t in model["reads"]
                 if v in model["passed"]})
     return {v: got[v] for v in model["passed"]} if kept else got
+
+
+class Unreadable(ValueError):
+    """A value the shield cannot read (:mod:`fretc.shield.runtime`, "a step is all or
+    nothing"); the message says which and why."""
+
+
+def _shown(value: Any) -> str:
+    text = repr(value)
+    return text if len(text) <= 40 else text[:37] + "..."
+
+
+def read_value(var: str, kind: str, values: dict[str, Any], proposal: bool = False) -> Any:
+    """``values[var]`` checked for a variable read as ``kind`` (``"b"`` a boolean, ``"n"``
+    a number; :mod:`fretc.shield.runtime`, "a step is all or nothing"): a bool, or a
+    float.
+
+    Raises:
+        Unreadable: missing, of the wrong type, NaN, too large for a double, (a
+            ``proposal``) infinite, or an exception (a host's reading that failed, e.g. an
+            :class:`Unreadable`: its message is the reason)."""
+    try:
+        value = values[var]
+    except KeyError:
+        raise Unreadable(f"{var} is missing") from None
+    if isinstance(value, Exception):  # (a host's reading that failed, with its reason; an
+        # Unreadable of another copy of this module, e.g. a generated shield's, is one too)
+        raise Unreadable(str(value))
+    t = type(value)
+    if t is float and kind == "n":  # (the common cases first: a step reads many values)
+        if value != value:
+            raise Unreadable(f"{var} is NaN")
+        if proposal and (value == math.inf or value == -math.inf):
+            raise Unreadable(f"{var} is {value}: no actuator takes an infinite value")
+        return value
+    if t is bool and kind == "b":
+        return value
+    if kind == "b":
+        if value is True or value is False:
+            return value
+        if type(value).__name__ == "bool_":  # (numpy's, from a message's array)
+            return bool(value)
+        if isinstance(value, numbers.Integral) and value in (0, 1):
+            return bool(value)
+        raise Unreadable(f"{var} must be a boolean, not {_shown(value)}")
+    if isinstance(value, bool) or not isinstance(value, numbers.Real) \
+            or type(value).__name__ == "bool_":
+        raise Unreadable(f"{var} must be a number, not {_shown(value)}")
+    try:
+        x = float(value)
+    except (OverflowError, ValueError, TypeError):
+        raise Unreadable(f"{var} is {_shown(value)}, which no double holds") from None
+    if x != x:
+        raise Unreadable(f"{var} is NaN")
+    if proposal and math.isinf(x):
+        raise Unreadable(f"{var} is {x}: no actuator takes an infinite value")
+    return x
+
+
+def _checked(kinds_of: dict[str, str], values: dict[str, Any], proposal: bool
+             ) -> dict[str, Any]:
+    """Every variable of ``kinds_of`` (variable -> kind) read from ``values`` as
+    :func:`read_value` reads it (a bool, or a finite float: taken as they are; anything
+    else through :func:`read_value`).
+
+    Raises:
+        Unreadable: as :func:`read_value`."""
+    out = {}
+    for v, k in kinds_of.items():
+        x = values.get(v, values)  # (``values`` itself: no variable's value)
+        t = type(x)
+        if (t is bool and k == "b") or (t is float and k == "n" and x - x == 0.0):
+            out[v] = x
+        else:
+            out[v] = read_value(v, k, values, proposal)
+    return out

@@ -11,7 +11,9 @@ import csv
 import io
 import itertools
 import json
+import math
 import random
+import re
 import subprocess
 import tempfile
 from pathlib import Path
@@ -113,10 +115,31 @@ def _holds(f, truth: dict) -> bool:
     return {"!": lambda: not args[0], "&": lambda: all(args), "|": lambda: any(args)}[f.op]()
 
 
-def test_a_comparison_of_an_input_with_an_output_is_refused_with_why(tmp_path):
+def test_a_comparison_of_an_input_with_an_output_is_enforced_as_a_bound(tmp_path):
+    """``p < a`` (a the environment's) was refused ("which its game does not see"): it is a
+    bound of p by the input (fretc.check.bounds), enforced: p the proposal where it is below
+    a, else the largest double below a."""
     compiled = compile_text("R: sw shall always satisfy p < a\n", tmp_path)
-    with pytest.raises(ShieldError, match="compares the input"):
-        build_shield(compiled, ["a"], ["p"], fork=False)
+    shield = build_shield(compiled, ["a"], ["p"], fork=False)
+    rt = ShieldRuntime(tables(shield))
+    assert rt.step({"a": 1.0}, {"p": 0.5}).outputs == {"p": 0.5}
+    d = rt.step({"a": 1.0}, {"p": 3.0})
+    assert d.outputs == {"p": math.nextafter(1.0, 0.0)} and d.reasons == ("R",)
+
+
+@pytest.mark.parametrize("response, why", [
+    ("p * a < 1", "multiplies the output p by a, which is no constant"),
+    ("p + q < a", "a bound reads one output"),
+    ("p = a", "by =: the shield bounds an output"),
+    ("absReal(p) < a", "reads the output p inside absReal(p)"),
+    ("p + p < a", "reads the output p 2 times"),
+    ("a / p < 1", "divides by the output p"),
+])
+def test_a_comparison_of_inputs_and_outputs_that_is_no_bound_is_refused_with_why(
+        tmp_path, response, why):
+    compiled = compile_text(f"R: sw shall always satisfy {response}\n", tmp_path)
+    with pytest.raises(ShieldError, match=re.escape(why)):
+        build_shield(compiled, ["a"], ["p", "q"], fork=False)
 
 
 def test_a_past_number_is_refused_with_why(tmp_path):

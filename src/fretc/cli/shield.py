@@ -88,6 +88,7 @@ def shield_cmd(files: tuple[str, ...], inputs: str | None, outputs: str | None,
     from fretc.fretish.fret_variables import fret_declarations
     from fretc.shield.build import ShieldUnknown, build_shield, parse_preferences, with_margin
     from fretc.shield.fallback import declared_fallback, parse_fallback
+    from fretc.shield.twists import twists_of
 
     if forms and out_dir is None:
         raise click.UsageError("--emit needs -o DIR")
@@ -116,13 +117,14 @@ def shield_cmd(files: tuple[str, ...], inputs: str | None, outputs: str | None,
     declared = parse_fallback(fallback)
     if declared is None:
         declared = declared_fallback(bindings_file)
+    twists = twists_of(bindings_file)
 
     def make(ticks: int) -> Any:  # (the shield with every deadline ``ticks`` early)
         return build_shield(with_margin(compiled, ticks), ins, outs, bindings=bindings,
                             prefer=parse_preferences(prefer),
                             budget=Budget(work=budget, memory=memory_budget, cpu=query_cpu),
                             name=name or Path(files[0]).stem, fallback=declared,
-                            assumptions=assumed)
+                            assumptions=assumed, twists=twists)
 
     try:
         shield = make(margin)
@@ -268,6 +270,16 @@ def _summary(shield) -> str:
                      f"nodes, {len(m.nodes)} table nodes")
     for g in shield.messages:
         lines.append(f"  corrected together (one message): {', '.join(g)}")
+    for m in shield.machines:
+        for v in dict.fromkeys(b["variable"] for b in m.bounds):
+            mine = [b for b in m.bounds if b["variable"] == v]
+            lines.append(f"  bounded by the inputs: {v} ({len(mine)} comparison"
+                         f"{'s' * (len(mine) > 1)} with the inputs; which truth values numbers "
+                         "give them is the environment's move): the number nearest the "
+                         "proposal that gives the decided ones")
+    for t in shield.twists:
+        lines.append(f"  one twist: {', '.join(t)}: a correction scales them together (the "
+                     "path's curvature kept) where the decided comparisons allow it")
     for rid, why in shield.monitored.items():
         lines.append(f"  monitored only: {rid}: {why}")
     if shield.assumptions:
