@@ -560,7 +560,7 @@ def _hostile_files(doc: str, tmp_path_factory) -> tuple[list, dict[str, str], li
     return compiled, files, _notes
 
 
-@settings(max_examples=100, deadline=None, derandomize=True)
+@settings(max_examples=80, deadline=None, derandomize=True)
 @given(hostile.exports())
 def test_hostile_glossaries_write_lustre_that_reads_back(tmp_path_factory, doc):
     """Property over hostile FRET exports (``tests/_hostile_fret.py``: assignments holding
