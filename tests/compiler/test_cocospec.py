@@ -553,7 +553,7 @@ def test_a_printed_definition_means_what_fretc_reads_at_every_tick(tree, seed):
 
 
 def _hostile_files(doc: str, tmp_path_factory) -> tuple[list, dict[str, str], list]:
-    path = tmp_path_factory.mktemp("hostile") / "p.json"
+    path = tmp_path_factory.getbasetemp() / "hostile_cocospec.json"  # (one file: each example)
     path.write_text(doc)
     compiled = _compiled([path])
     files, _skipped, _notes = emit_cocospec(compiled)

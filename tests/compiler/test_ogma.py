@@ -252,7 +252,7 @@ def test_hostile_glossaries_give_ogma_the_names_its_expressions_read(tmp_path_fa
     library nodes and renamings as names; hostile assignments and ids): every file reads as
     Ogma reads it, its ``Other_variables`` name each variable once, and each requirement's
     ``ptLTL`` and ``CoCoSpecCode`` read those names and the same ones."""
-    path = tmp_path_factory.mktemp("hostile") / "p.json"
+    path = tmp_path_factory.getbasetemp() / "hostile_ogma.json"  # (one file: each example)
     path.write_text(doc)
     files, _skipped, _notes = emit_ogma(_compiled([path]))
     for text in files.values():
