@@ -33,7 +33,9 @@ def ltlsim_cmd(requirements: tuple[str, ...], ids: tuple[str, ...], port: int,
     """Serve FRET's simulator for the requirements of REQUIREMENTS (files or folders) on
     http://127.0.0.1:PORT/: a trace you edit (booleans toggled per tick, numbers typed,
     ticks added or removed) and, per requirement, its value at each tick, its verdict and
-    its first violation, judged as `fretc audit` judges a trace. Loopback only."""
+    its first violation, judged as `fretc audit` judges a trace. Loopback only, and only
+    the page's own requests: a request of another origin is refused (a script's POST to
+    /api/judge sends Origin: http://127.0.0.1:PORT)."""
     from fretc.common.errors import FretcError
     from fretc.compiler.build import compile_entries
     from fretc.fretish.files import load_requirements
