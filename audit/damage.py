@@ -36,9 +36,8 @@ import numpy as np
 
 from fretc.fretish import ast as A
 
-from fretc.monitors.interval import (Evidence, EvidenceUnsupported, scope_of, trace_signals,
-    trigger_points)
-from fretc.monitors.obligations import ObligationChecker
+from fretc.monitors.interval import Evidence, EvidenceUnsupported, every_trigger
+from fretc.monitors.obligations import FirstEvents
 
 __all__ = ["OpenObligation", "open_obligations", "open_reason", "verdict_at_damage"]
 
@@ -83,23 +82,21 @@ def open_obligations(req: A.Requirement, columns: Mapping[str, np.ndarray], n: i
         raise EvidenceUnsupported("a free-form requirement has no semantics")
     if n < 1:
         return []
-    scope, cond, timing = req.scope.kind, req.condition.kind, req.timing.kind
+    scope, timing = req.scope.kind, req.timing.kind
     negate = scope.startswith("only")
-    # (the mode's temporal functions endpoint-free, as in the verdict's evidence,
-    # monitors.interval.evaluate_requirement)
-    intervals = scope_of(req, columns, n)
-    last = [(s, e) for s, e in intervals if e == n - 1]
-    if not last:
-        return []
-    R, C, S = trace_signals(req, columns, n, intervals)
     k = 0
     if timing in A.DURATION_TIMINGS:
         assert req.timing.duration is not None  # (a duration timing has it)
         k = int(duration_ticks) if duration_ticks is not None else int(
             req.timing.duration.amount)
-    chk = ObligationChecker(timing, negate, R, S, k)
-    s, e = last[0]
-    points = trigger_points(cond, C, s, e)
+    # (the scope intervals and triggers of the verdict's evidence, monitors.interval)
+    got = every_trigger(req, columns, n, k)
+    last = [j for j, (_s, e) in enumerate(got.intervals) if e == n - 1]
+    if not last:
+        return []
+    chk = FirstEvents(got.R, got.S)
+    s, e = got.intervals[last[0]]
+    points = got.triggers[last[0]]
     out: list[OpenObligation] = []
     kind = "eventually" if timing == "null" else timing
     want = not negate
@@ -115,7 +112,7 @@ def open_obligations(req: A.Requirement, columns: Mapping[str, np.ndarray], n: i
 
 
 def open_reason(timing: str, negate: bool, t: int, e: int, k: int,
-                chk: ObligationChecker) -> str | None:
+                chk: FirstEvents) -> str | None:
     """Why the obligation of the trigger ``t`` is still open at ``e``, the last tick read
     (its interval reaching it), or None when the ticks up to ``e`` meet or miss it: the rule
     of :func:`open_obligations` for one trigger (``chk`` over those ticks, ``k`` the
@@ -127,10 +124,10 @@ def open_reason(timing: str, negate: bool, t: int, e: int, k: int,
 
 
 def _open(kind: str, negate: bool, want: bool, t: int, e: int, k: int,
-          chk: ObligationChecker, nWant, nUnwant) -> str | None:
+          chk: FirstEvents, nWant, nUnwant) -> str | None:
     """Why the obligation of trigger ``t`` is open at the end ``e`` of the intact span, or
-    None when it is met or missed already (the semantics of
-    :class:`fretc.monitors.obligations.ObligationChecker`)."""
+    None when it is met or missed already (FRET's obligations,
+    :data:`fretc.monitors.obligations.OBLIGATIONS`)."""
     rname = "R" if want else "!R"
     if kind == "immediately":
         return None

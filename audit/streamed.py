@@ -9,7 +9,7 @@ read, to three streams per requirement, each the exact counterpart of one part o
 judge, and nothing of the chunk is kept after it:
 
 * FRET's interval semantics: the verdict, the vacuity, the counts and the violations
-  (:class:`fretc.monitors.interval_stream.IntervalStream`, equal to
+  (:class:`fretc.monitors.interval.IntervalStream`, equal to
   :func:`fretc.monitors.interval.evaluate_requirement` over the whole trace);
 * the pt formula's robustness: its value, tick and the margin's points
   (:class:`fretc.monitors.robustness.RobustnessStream`, equal to
@@ -54,7 +54,7 @@ from fretc.fretish import ast as A
 from fretc.logs import CsvSource
 from fretc.monitors.expressions import EvidenceUnsupported
 from fretc.monitors.interval import Evidence
-from fretc.monitors.interval_stream import IntervalStream, stream_unsupported
+from fretc.monitors.interval import IntervalStream, stream_unsupported
 from fretc.monitors.judge import Ltl3Stream, compared_exprs
 from fretc.monitors.nan import nan_ticks_of
 from fretc.monitors.robustness import RobustnessStream, RobustnessSummary

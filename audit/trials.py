@@ -29,9 +29,9 @@ from collections.abc import Iterator, Mapping
 from dataclasses import dataclass
 
 from fretc.fretish import ast as A
-from fretc.monitors.interval import scope_of, trace_signals, trigger_points
+from fretc.monitors.interval import Violation, every_trigger
 from fretc.monitors.unknowns import Unknowns, possible_trigger
-from fretc.monitors.obligations import ObligationChecker
+from fretc.monitors.obligations import FirstEvents
 
 from fretc.audit.damage import open_reason
 
@@ -100,31 +100,32 @@ def trigger_outcomes(req: A.Requirement, columns: Mapping[str, np.ndarray], n: i
     scope, cond, timing = req.scope.kind, req.condition.kind, req.timing.kind
     negate = scope.startswith("only")
     k = int(duration_ticks or 0) if timing in A.DURATION_TIMINGS else 0
-    R, C, S = trace_signals(req, columns, n)
-    chk = ObligationChecker(timing, negate, R, S, k)
-    for s, e in scope_of(req, columns, n):
+    got = every_trigger(req, columns, n, k)
+    chk = FirstEvents(got.R, got.S)
+    for (s, e), points in zip(got.intervals, got.triggers):
         known_scope = unknowns is None or unknowns.scope_known(s, e, scope)
-        for t in trigger_points(cond, C, s, e):
+        for t in points:
             if not known_scope or (unknowns is not None
                                    and not unknowns.trigger_known(t, s, cond)):
                 yield t, "unknown"
             else:
-                yield t, _outcome(timing, negate, t, (s, e), k, chk, unknowns, damaged, n)
+                yield t, _outcome(timing, negate, t, (s, e), k, chk, got.failed.get(t),
+                                  unknowns, damaged, n)
 
 
 def _outcome(timing: str, negate: bool, t: int, interval: tuple[int, int], k: int,
-             chk: ObligationChecker, u: Unknowns | None, damaged: bool, n: int) -> str:
-    """``satisfied``, ``violated``, ``cut`` or ``unknown`` for the known trigger ``t``."""
+             chk: FirstEvents, bad: Violation | None, u: Unknowns | None, damaged: bool,
+             n: int) -> str:
+    """``satisfied``, ``violated``, ``cut`` or ``unknown`` for the known trigger ``t``
+    (``bad``: its failed obligation, None when met)."""
     s, e = interval
     if e == n - 1 and open_reason(timing, negate, t, e, k, chk) is not None:
         if damaged:
             return "unknown"
         if timing in TIMED_WINDOWS:
             return "cut"
-    bad = chk.check(t, e)
     if bad is not None:
-        window, vt, _reason = bad
-        if u is None or u.missed_known(t, window[0], vt, timing, negate):
+        if u is None or u.missed_known(t, bad.window[0], bad.violation_tick, timing, negate):
             return "violated"
         return "unknown"
     return "satisfied" if _met_known(timing, negate, t, e, k, chk, u) else "unknown"
@@ -136,7 +137,7 @@ _SOMEWHERE = {("eventually", False): True, ("null", False): True, ("within", Fal
               ("never", True): True, ("always", True): False, ("for", True): False}
 
 
-def _met_known(timing: str, negate: bool, t: int, e: int, k: int, chk: ObligationChecker,
+def _met_known(timing: str, negate: bool, t: int, e: int, k: int, chk: FirstEvents,
                u: Unknowns | None) -> bool:
     """A met obligation is met whatever the unknown ticks held: for the obligations one
     tick meets, that tick is known (or none was needed: the interval ended first); for the

@@ -4,7 +4,7 @@ unknown value), fed a chunk of ticks at a time: the evidence the three-valued ju
 :func:`fretc.monitors.interval.evaluate_requirement` with ``favour``), in memory that does
 not grow with the trace's ticks.
 
-:class:`DefiniteStream` feeds an :class:`~fretc.monitors.interval_stream.IntervalStream`
+:class:`DefiniteStream` feeds an :class:`~fretc.monitors.interval.IntervalStream`
 each chunk's signals with their unknown ticks set to meet the obligation (``favour``), so it
 lists the failed triggers the known ticks make, in the whole-trace order. Alongside it:
 
@@ -33,7 +33,7 @@ import numpy as np
 
 from fretc.fretish import ast as A
 from fretc.monitors.interval import Evidence
-from fretc.monitors.interval_stream import IntervalStream
+from fretc.monitors.interval import IntervalStream
 from fretc.monitors.unknowns import Unknowns
 
 __all__ = ["DefiniteStream", "MAX_RUNS"]
@@ -118,11 +118,11 @@ class DefiniteStream:
     (module docstring).
 
     Args:
-        req: a requirement :func:`fretc.monitors.interval_stream.stream_unsupported` takes.
-        duration_ticks: as :class:`~fretc.monitors.interval_stream.IntervalStream`'s.
+        req: a requirement :func:`fretc.monitors.interval.stream_unsupported` takes.
+        duration_ticks: as :class:`~fretc.monitors.interval.IntervalStream`'s.
 
     Raises:
-        EvidenceUnsupported: as :class:`~fretc.monitors.interval_stream.IntervalStream`.
+        EvidenceUnsupported: as :class:`~fretc.monitors.interval.IntervalStream`.
 
     Attributes:
         too_many: some part had more than :data:`MAX_RUNS` runs of unknown ticks (the
@@ -205,7 +205,7 @@ class DefiniteStream:
     def finish(self) -> tuple[Evidence, dict[int, int]]:
         """The evidence (its ``holds`` and ``vacuous`` the favoured stream's: the caller's
         three-valued verdict decides them) and the times of the ticks it names, as
-        :meth:`~fretc.monitors.interval_stream.IntervalStream.finish` gives them.
+        :meth:`~fretc.monitors.interval.IntervalStream.finish` gives them.
 
         Raises:
             ValueError: no tick was fed."""

@@ -23,8 +23,8 @@ import numpy as np
 from fretc.fretish import ast as A
 from fretc.compiler.printers import expr_text
 
-from fretc.monitors.interval import scope_intervals, trigger_points
-from fretc.monitors.obligations import OBLIGATIONS, ObligationChecker
+from fretc.monitors.interval import IntervalStream, Violation
+from fretc.monitors.obligations import OBLIGATIONS
 
 if TYPE_CHECKING:
     from fretc.compiler.build import Compiled
@@ -124,7 +124,8 @@ def diagram(req: A.Requirement, k: int | None) -> Diagram:
     n = w + 10
     scope, cond, timing = req.scope.kind, req.condition.kind, req.timing.kind
     mode = _mode_layout(scope, n, w)
-    intervals = scope_intervals(scope, mode, n)
+    none = np.zeros(n, dtype=np.bool_)
+    intervals = _judged(req, kk, mode, none, none, none, n).intervals
     d = Diagram(n=n, scope=intervals, negated=scope.startswith("only"), drawn_ticks=drawn)
     if mode is not None:
         d.signals["scope mode"] = mode.tolist()
@@ -135,8 +136,7 @@ def diagram(req: A.Requirement, k: int | None) -> Diagram:
     C[min(s + 2, e):min(s + 5, e + 1)] = True
     if cond != "null":
         d.signals["condition"] = C.tolist()
-    for a, b in intervals:
-        d.triggers += trigger_points(cond, C if cond != "null" else None, a, b)
+    d.triggers += _judged(req, kk, mode, none, C, none, n).triggers.tolist()
     S = None
     t = d.triggers[0] if d.triggers else s
     if timing in A.STOP_TIMINGS:
@@ -148,10 +148,10 @@ def diagram(req: A.Requirement, k: int | None) -> Diagram:
         return d
     for value in (False, True):
         R = np.full(n, value, dtype=np.bool_)
-        bad = ObligationChecker(timing, d.negated, R, S, k).check(t, e)
+        bad = _failed(_judged(req, kk, mode, R, C, S, n), t)
         if bad is None:
             continue
-        window, _tick, _why = bad
+        window = bad.window
         if value is False:
             d.required = (window[0], window[1])  # R never holds: where it was required
         else:
@@ -162,6 +162,22 @@ def diagram(req: A.Requirement, k: int | None) -> Diagram:
         lo, hi = d.required
         d.required, d.forbidden = (hi, hi), (lo, hi - 1)
     return d
+
+
+def _judged(req: A.Requirement, k: int, mode: np.ndarray | None, R: np.ndarray,
+            C: np.ndarray, S: np.ndarray | None, n: int) -> IntervalStream:
+    """FRET's interval semantics of ``req``'s kinds over the drawn signals (``n`` ticks;
+    ``k`` the duration drawn), every interval and trigger recorded, finished."""
+    s = IntervalStream(req, k, limit=n + 1, record=True)
+    s.feed_signals(mode, R, C, S if S is not None else np.zeros(n, np.bool_), n,
+                   np.arange(n, dtype=np.int64))
+    s.finish()
+    return s
+
+
+def _failed(s: IntervalStream, t: int) -> Violation | None:
+    """The failed obligation of the trigger ``t`` of the finished stream ``s``, or None."""
+    return next((v for v in s.finish()[0].listed if v.trigger_tick == t), None)
 
 
 _SCOPES = {

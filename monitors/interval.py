@@ -1,129 +1,83 @@
-"""FRET's interval semantics computed directly over a sampled trace: the evidence behind a
-verdict, and a second opinion on it.
+"""FRET's interval semantics of one requirement, the verdict and the evidence behind it, over
+a trace fed a chunk of ticks at a time (:class:`IntervalStream`); judging a whole trace is
+feeding it one chunk (:func:`evaluate_requirement`).
 
 The monitors decide a requirement with its past-time formula; this module decides it again
 from the meaning the formulas encode (``../shared/fretish/README.md`` sections 2-4; FRET's
 ``fretishSemantics`` manual; Giannakopoulou et al., IST 2021), without any formula code, and
 says *why*:
 
-1. **Scope intervals** (inclusive tick ranges ``[s, e]``) from the mode ``M``: ``null`` is
-   the whole run; ``in`` every maximal run of ``M``; ``notin`` every maximal run of ``!M``;
-   ``before`` from the start up to (not including) the first ``M`` point; ``after`` from the
-   point just past the first ``M`` run to the end (none when that run reaches the end).
-   ``only*`` scopes check the *complement* with the response negated: ``onlyIn`` the runs of
-   ``!M``; ``onlyBefore`` from the first ``M`` point to the end; ``onlyAfter`` from the start
-   to the end of the first ``M`` run.
-2. **Trigger points** in each interval from the condition ``C``: ``null`` - the interval's
-   first point; ``holding`` (``whenever``) - every point where ``C`` holds; ``regular`` -
-   every point where ``C`` becomes true, or holds at the interval's first point.
+1. **Scope intervals** (inclusive tick ranges ``[s, e]``) are the maximal runs of one
+   membership flag: ``null`` every tick; ``in`` ``M``; ``notin``/``onlyIn`` ``!M``;
+   ``before`` "no ``M`` so far"; ``onlyBefore`` "some ``M`` so far"; ``after`` "``M`` has
+   fallen (``!M`` right after ``M``) so far"; ``onlyAfter`` "``M`` has not fallen yet".
+   ``only*`` scopes check the *complement* with the response negated. An interval is closed
+   at ``e`` when the tick after ``e`` is out of it, or at the end of the trace.
+2. **Trigger points** in each interval from the condition ``C`` (:func:`trigger_ticks`):
+   ``null`` the interval's first point; ``holding`` (``whenever``) every point where ``C``
+   holds; ``regular`` every point where ``C`` becomes true, or holds at the interval's first
+   point.
 3. **The timing's obligation** from each trigger ``t`` until the interval end ``e``
-   (../shared/fretish/README.md section 4, :mod:`fretc.monitors.obligations`), e.g.
-   ``within k``: ``R`` somewhere in ``[t, t+k]``, vacuous when ``e < t+k``; ``only*`` scopes
-   use the negated obligation.
+   (:data:`fretc.monitors.obligations.OBLIGATIONS`), e.g. ``within k``: ``R`` somewhere in
+   ``[t, t+k]``, vacuous when ``e < t+k``; ``only*`` scopes use the negated obligation.
+   Decided chunk by chunk by :mod:`fretc.monitors.interval_fates`.
 
 A requirement holds iff every trigger meets its obligation; it holds *vacuously* when there is
 no scope interval or no trigger. The first violation is the earliest trigger (in tick order)
 whose obligation fails; :class:`Violation` gives its scope interval, the response window
 looked at and the tick at which the obligation was definitely missed.
 
-Expressions are evaluated over numpy columns by :mod:`fretc.monitors.expressions` (one value per tick
-per FRET variable) with the
-same value conventions as the generated monitors (a number read as a condition is
-``bool(x)``; ``/`` by zero is NaN). Every FRET temporal function is evaluated from the
-"meaning" column of ``../shared/fretish/README.md`` section 6b, relative to FRET's ``Left`` /
-``Right`` of the requirement's scope (:func:`endpoints`) in conditions, responses and stop
-conditions, and in FRET's endpoint-free forms inside scope conditions: ``persisted`` and
-``occurred`` (2 and 3 arguments), ``persists`` and ``occurs`` (2 and 3 arguments),
-``prevOcc`` / ``at the previous occurrence of`` (true at an interval's first position),
-``nextOcc`` / ``at the next occurrence of`` (true at its last), ``preBool`` / ``preInt`` /
-``preReal`` (relative to the run's first tick), nested in any way. Future-time functions near
-the end of the trace read FRET's absorbing state after it (every variable false, every
-number 0; section 6's trace model), where an interval of ``notin``/``onlyIn``/``before``
-reaching the end has no ``Right``. Only uninterpreted functions and free-form sentences raise
-:class:`EvidenceUnsupported` (the audit then reports the monitor's verdict without interval
-evidence). tests/monitors/test_evidence_functions.py checks all of this against the
-generated monitors, FRET's formulas and an independent oracle on random sentences.
+**Expressions** are evaluated over numpy columns by :mod:`fretc.monitors.expressions` with the
+generated monitors' value conventions (a number read as a condition is ``bool(x)``; ``/`` by
+zero is NaN). A requirement whose expressions are *pointwise* (their value at a tick reads that
+tick's column values only; ``FTP`` with the chunk's offset) is fed any chunks. FRET's temporal
+functions (:data:`NOT_POINTWISE`, the occurrence phrases included) read other ticks through
+FRET's ``Left``/``Right`` of the scope (:func:`endpoints`) in conditions, responses and stop
+conditions, and in FRET's endpoint-free forms inside scope conditions, from the "meaning"
+column of section 6b; near the end of the trace the future-time ones read FRET's absorbing
+state after it (section 6's trace model). A requirement using one is fed the whole trace as
+one chunk (:func:`stream_unsupported` says why it cannot be chunked). Only uninterpreted
+functions (read from the column named by the printed call) and free-form sentences raise
+:class:`EvidenceUnsupported`. tests/monitors/test_evidence.py and test_evidence_functions.py
+check this against the generated monitors, FRET's formulas and an independent oracle;
+tests/monitors/test_interval_stream.py every split of a trace into chunks against one chunk.
 
-Cost: O(ticks + triggers) time and a few arrays of ``n`` items; the audit keeps the columns
-of the requirement's own variables for this (1 byte per tick for a boolean, 8 for a number).
+Memory: O(chunk + k + :data:`MAX_LISTED`), ``k`` the duration in ticks of ``within``/``for``/
+``after`` (the waiting triggers, 32 bytes each); nothing grows with the number of ticks, of
+intervals or of triggers (unless every trigger is recorded: :func:`every_trigger`). CPU:
+O(chunk) numpy work per chunk, never a Python loop over ticks or triggers.
 """
 
 from __future__ import annotations
 
-from collections.abc import Mapping
-from dataclasses import dataclass, field
+from collections.abc import Callable, Iterator, Mapping
+from dataclasses import dataclass
 from fractions import Fraction
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
 from fretc.fretish import ast as A
-
+from fretc.fretish.fret_since import SINCE
+from fretc.monitors.evidence import MAX_LISTED, Evidence, Violation
 from fretc.monitors.expressions import ColumnExpressions, EvidenceUnsupported
-from fretc.monitors.obligations import OBLIGATIONS, Interval, ObligationChecker
+from fretc.monitors.interval_fates import BOUNDED, NONE, Bounded, Chunk, Group, Ledger
+from fretc.monitors.obligations import OBLIGATIONS, Interval
 
-if TYPE_CHECKING:
-    from fretc.monitors.unknowns import Unknowns
+__all__ = ["EvidenceUnsupported", "Violation", "Evidence", "MAX_LISTED", "IntervalStream",
+           "evaluate_requirement", "verdict_of", "every_trigger", "Triggered", "duration_of",
+           "favoured", "endpoints", "scope_mode", "scope_intervals", "stream_unsupported",
+           "trigger_ticks", "NOT_POINTWISE", "OBLIGATIONS"]
 
-__all__ = ["EvidenceUnsupported", "Violation", "Evidence", "evaluate_requirement", "verdict_of",
-           "duration_of", "favoured",
-           "endpoints", "scope_mode",
-           "scope_intervals", "scope_of", "trace_signals", "trigger_points", "OBLIGATIONS"]
-
-#: How many failed triggers an :class:`Evidence` lists (all are counted).
-MAX_LISTED = 100
-
-
-@dataclass(frozen=True)
-class Violation:
-    """The first trigger whose obligation failed (all ticks 0-based, inclusive).
-
-    Attributes:
-        trigger_tick: the trigger point ``t``.
-        interval: the scope interval ``(s, e)`` holding it.
-        window: ``(lo, hi)``: the ticks the obligation was about (e.g. ``[t, t+k]`` for
-            ``within k``); ``hi`` may exceed ``e`` only where FRET looks past it.
-        violation_tick: the tick at which the obligation was definitely missed (for
-            ``eventually`` the interval end; for ``always`` the first point where the
-            response failed).
-        reason: one sentence for a person, in tick numbers.
-    """
-
-    trigger_tick: int
-    interval: Interval
-    window: Interval
-    violation_tick: int
-    reason: str
+#: FRET's temporal functions: their value at a tick reads other ticks (and the scope's
+#: ``Left``/``Right``), so a chunk alone cannot evaluate them.
+NOT_POINTWISE = ("persisted", "occurred", "persists", "occurs", "prevOcc", "nextOcc",
+                 "preBool", "preInt", "preReal", SINCE)
+#: No limit on the violations listed (:func:`every_trigger`).
+_ALL = 1 << 62
 
 
-@dataclass
-class Evidence:
-    """The interval-semantics verdict of one requirement on one trace.
-
-    Attributes:
-        holds: FRET's finite-trace verdict (equals the monitor's ``finish()``).
-        vacuous: ``holds`` and there was no scope interval or no trigger.
-        intervals: number of scope intervals; ``first_interval`` the first one.
-        triggers: number of trigger points over all intervals.
-        violations: number of triggers whose obligation failed.
-        violation: the first of them, or None.
-        listed: the failed triggers in order, at most :data:`MAX_LISTED` of them.
-        ticks: trace length.
-    """
-
-    holds: bool
-    vacuous: bool
-    intervals: int
-    triggers: int
-    violations: int
-    violation: Violation | None
-    ticks: int
-    first_interval: Interval | None = None
-    first_trigger: int | None = None
-    listed: list[Violation] = field(default_factory=list)
-
-
-# --------------------------------------------------------------------------- scopes
+# --------------------------------------------------------------------------- expressions
 def endpoints(kind: str, mode: np.ndarray | None, n: int) -> tuple[np.ndarray, np.ndarray]:
     """FRET's ``Left`` and ``Right`` of a scope (``../shared/fretish/README.md`` section 6b's
     table) at each of the ``n`` ticks of a finite trace: ``Left`` (a pt formula) marks the
@@ -178,58 +132,6 @@ def endpoints(kind: str, mode: np.ndarray | None, n: int) -> tuple[np.ndarray, n
     raise ValueError(f"unknown scope kind {kind!r}")
 
 
-def _runs(x: np.ndarray) -> list[Interval]:
-    """Maximal runs of True in ``x``: [(start, end)] inclusive."""
-    if not len(x):
-        return []
-    d = np.diff(np.concatenate(([0], x.astype(np.int8), [0])))
-    starts = np.flatnonzero(d == 1)
-    ends = np.flatnonzero(d == -1) - 1
-    return list(zip(starts.tolist(), ends.tolist()))
-
-
-def scope_intervals(kind: str, mode: np.ndarray | None, n: int) -> list[Interval]:
-    """Scope intervals of a trace of ``n`` ticks (module docstring, point 1).
-
-    Args:
-        kind: a scope kind of :data:`fretc.fretish.ast.SCOPE_KINDS`.
-        mode: the mode's truth at each tick (None for ``null``).
-
-    Returns:
-        Disjoint inclusive ``(start, end)`` tick ranges in order. For ``only*`` scopes these
-        are the complement intervals in which the negated obligation is checked.
-    """
-    if n == 0:
-        return []
-    if kind == "null":
-        return [(0, n - 1)]
-    m = np.asarray(mode, dtype=np.bool_)
-    if kind == "in":
-        return _runs(m)
-    if kind in ("notin", "onlyIn"):
-        return _runs(~m)
-    first_m = int(np.argmax(m)) if m.any() else None
-    if kind == "before":
-        if m[0]:
-            return []
-        return [(0, (first_m if first_m is not None else n) - 1)]
-    if kind == "onlyBefore":
-        if first_m is None:
-            return []
-        return [(first_m, n - 1)]
-    runs = _runs(m)
-    if kind == "after":
-        if not runs or runs[0][1] == n - 1:
-            return []
-        return [(runs[0][1] + 1, n - 1)]
-    if kind == "onlyAfter":
-        if not runs:
-            return [(0, n - 1)]
-        return [(0, runs[0][1])]
-    raise ValueError(f"unknown scope kind {kind!r}")
-
-
-# --------------------------------------------------------------------------- the trace
 def scope_mode(req: A.Requirement, columns: Mapping[str, np.ndarray], n: int
                ) -> np.ndarray | None:
     """The truth of ``req``'s scope mode (or scope condition) at each of ``n`` ticks, its
@@ -241,114 +143,87 @@ def scope_mode(req: A.Requirement, columns: Mapping[str, np.ndarray], n: int
     return ColumnExpressions(columns, n, free=True).bool(req.scope.mode)[:n]
 
 
-def scope_of(req: A.Requirement, columns: Mapping[str, np.ndarray], n: int
-             ) -> list[Interval]:
-    """The scope intervals of ``req`` over ``n`` ticks (:func:`scope_intervals`), its mode
-    evaluated with FRET's endpoint-free function forms (:func:`scope_mode`)."""
-    return scope_intervals(req.scope.kind, scope_mode(req, columns, n), n)
+def _expressions(req: A.Requirement) -> list[tuple[str, A.Expr]]:
+    """(role, expression) of each expression the interval semantics evaluates for ``req``."""
+    out: list[tuple[str, A.Expr]] = []
+    if req.scope.kind != "null" and req.scope.mode is not None:
+        out.append(("scope condition", req.scope.mode))
+    if req.condition.kind != "null" and req.condition.expr is not None:
+        out.append(("condition", req.condition.expr))
+    if req.timing.kind in A.STOP_TIMINGS and req.timing.stop is not None:
+        out.append(("stop condition", req.timing.stop))
+    if req.response is not None:
+        out.append(("response", req.response))
+    return out
 
 
-def trace_signals(req: A.Requirement, columns: Mapping[str, np.ndarray], n: int,
-                  intervals: list[Interval] | None = None
-                  ) -> tuple[np.ndarray, np.ndarray | None, np.ndarray | None]:
-    """(response ``R``, condition ``C`` or None, stop condition ``S`` or None) at each of
-    the ``n`` ticks, their temporal functions relative to FRET's ``Left``/``Right`` of the
-    requirement's scope (:func:`endpoints`, from the scope mode; ``intervals`` is accepted
-    for compatibility and not needed)."""
-    return _signals(req, columns, n, scope_mode(req, columns, n))
+class _ChunkExpressions(ColumnExpressions):
+    """:class:`ColumnExpressions` (FRET's endpoint-free forms, which equal the scoped ones for
+    pointwise expressions) over one chunk whose first tick is the trace's tick ``offset``:
+    ``FTP`` is true at the trace's tick 0 only."""
+
+    def __init__(self, columns: Mapping[str, np.ndarray], n: int, offset: int) -> None:
+        super().__init__(columns, n, free=True)
+        self.offset = offset
+
+    def bool(self, e: A.Expr) -> np.ndarray:
+        """As :meth:`ColumnExpressions.bool`, ``FTP`` read at the chunk's offset."""
+        if isinstance(e, A.Var) and e.name == "FTP":
+            return self.idx == -self.offset
+        return super().bool(e)
 
 
-def _signals(req: A.Requirement, columns: Mapping[str, np.ndarray], n: int,
-             mode: np.ndarray | None):
-    """:func:`trace_signals` given the scope mode's truth at each tick."""
-    left, right = endpoints(req.scope.kind, mode, n)
-    ex = ColumnExpressions(columns, n, left, right)
-    # (a formalizable requirement has a response, a condition's expression unless null, and
-    # a stop condition with until and before)
-    assert req.response is not None
-    R = ex.bool(req.response)[:n]
-    C = ex.bool(req.condition.expr)[:n] if req.condition.kind != "null" else None  # type: ignore[arg-type]
-    S = ex.bool(req.timing.stop)[:n] if req.timing.kind in A.STOP_TIMINGS else None  # type: ignore[arg-type]
-    return R, C, S
+class _AnyColumns(Mapping[str, np.ndarray]):
+    """Every name has an empty column: evaluating an expression over 0 ticks then raises only
+    what does not depend on the data (an arithmetic operator as a condition, a call the
+    compiler cannot print)."""
+
+    _EMPTY = np.zeros(0)
+
+    def __getitem__(self, key: str) -> np.ndarray:
+        return self._EMPTY
+
+    def __contains__(self, key: object) -> bool:
+        return True
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(())
+
+    def __len__(self) -> int:
+        return 0
 
 
-def trigger_points(cond: str, C: np.ndarray | None, s: int, e: int) -> list[int]:
-    """The trigger points of the scope interval ``[s, e]`` (module docstring, point 2)."""
-    if cond == "null":
-        return [s]
-    assert C is not None  # (a condition other than null has its truth)
-    if cond == "holding":
-        return (np.flatnonzero(C[s:e + 1]) + s).tolist()
-    seg = C[s:e + 1]
-    rise = seg.copy()
-    rise[1:] &= ~seg[:-1]
-    return (np.flatnonzero(rise) + s).tolist()
+def _temporal_function(req: A.Requirement) -> str | None:
+    """Why ``req``'s expressions are not pointwise (module docstring), or None."""
+    for role, e in _expressions(req):
+        for x in A.walk(e):
+            if isinstance(x, A.Call) and x.name in NOT_POINTWISE:
+                return (f"the {role} uses FRET's temporal function {x.name}, whose value at "
+                        "a tick reads other ticks: the interval stream evaluates pointwise "
+                        "expressions only")
+    return None
 
 
-# --------------------------------------------------------------------------- entry point
-def evaluate_requirement(req: A.Requirement, columns: Mapping[str, np.ndarray], n: int,
-                         duration_ticks: int | None = None, favour: Unknowns | None = None
-                         ) -> Evidence:
-    """Decide ``req`` on a trace of ``n`` ticks by FRET's interval semantics.
-
-    Args:
-        req: a parsed (not free-form) requirement.
-        columns: FRET variable -> 1-D array of ``n`` values (bool or numeric).
-        n: number of ticks (>= 1).
-        duration_ticks: the timing's duration in ticks (``within``/``for``/``after``), as
-            converted by the compiler (``Formalization.ticks``); None reads the duration's
-            amount as ticks.
-        favour: where the condition, response and stop condition are unknown (an object
-            with bool arrays ``C``, ``R``, ``S``: :class:`fretc.monitors.unknowns.Unknowns`):
-            there they take the value that meets the obligation (no trigger, the response
-            the timing wants, the stop condition that ends it), so the failures left are
-            those the known ticks make; None: the columns as they are.
-
-    Returns:
-        An :class:`Evidence`.
-
-    Raises:
-        EvidenceUnsupported: free-form, or an uninterpreted function.
-        KeyError: a variable missing from ``columns``.
-        ValueError: ``n`` < 1.
-    """
+def stream_unsupported(req: A.Requirement) -> str | None:
+    """None when :class:`IntervalStream` takes ``req`` in chunks of any size, else why not, in
+    words: a free-form sentence; an expression (scope condition, condition, stop condition,
+    response) that uses one of FRET's temporal functions (:data:`NOT_POINTWISE`, the
+    occurrence phrases included: such a requirement is fed the whole trace as one chunk);
+    or one the interval semantics cannot evaluate whatever the data (the reason
+    :class:`EvidenceUnsupported` gives). An uninterpreted function is taken: its column is
+    looked for in each chunk (:meth:`IntervalStream.feed`)."""
     if req.freeform or req.response is None:
-        raise EvidenceUnsupported("a free-form requirement has no semantics")
-    if n < 1:
-        raise ValueError("the interval semantics needs at least one tick")
-    scope, cond, timing = req.scope.kind, req.condition.kind, req.timing.kind
-    # scope conditions use FRET's endpoint-free function forms (../shared/fretish/README.md
-    # section 6b); conditions, responses and stop conditions the scope's Left/Right
-    mode = scope_mode(req, columns, n)
-    intervals = scope_intervals(scope, mode, n)
-    R, C, S = _signals(req, columns, n, mode)
-    if favour is not None:
-        R, C, S = favoured(req, R, C, S, favour)
-    k = duration_of(req, duration_ticks)
-    checker = ObligationChecker(timing, scope.startswith("only"), R, S, k)
-    triggers = violations = 0
-    first: Violation | None = None
-    listed: list[Violation] = []
-    first_trigger: int | None = None
-    for s, e in intervals:
-        for t in trigger_points(cond, C, s, e):
-            triggers += 1
-            if first_trigger is None:
-                first_trigger = t
-            bad = checker.check(t, e)
-            if bad is not None:
-                violations += 1
-                if len(listed) < MAX_LISTED:
-                    window, vt, reason = bad
-                    listed.append(Violation(t, (s, e), window, vt, reason))
-                    if first is None:
-                        first = listed[0]
-    holds = violations == 0
-    return Evidence(holds=holds, vacuous=holds and (not intervals or triggers == 0),
-                    intervals=len(intervals), triggers=triggers, violations=violations,
-                    violation=first, ticks=n,
-                    first_interval=intervals[0] if intervals else None,
-                    first_trigger=first_trigger, listed=listed)
+        return "a free-form requirement has no semantics"
+    why = _temporal_function(req)
+    if why is not None:
+        return why
+    ex = _ChunkExpressions(_AnyColumns(), 0, 0)
+    for _role, e in _expressions(req):
+        try:
+            ex.bool(e)
+        except EvidenceUnsupported as exc:
+            return str(exc)
+    return None
 
 
 def duration_of(req: A.Requirement, duration_ticks: int | None) -> int | None:
@@ -385,6 +260,303 @@ def favoured(req: A.Requirement, R: np.ndarray, C: np.ndarray | None,
     return R, C, S
 
 
+# --------------------------------------------------------------------------- scopes
+class _Membership:
+    """Which ticks lie in a scope interval (for ``only*`` scopes: in an interval of the
+    complement), chunk by chunk; the intervals are the maximal runs of it (module
+    docstring, point 1)."""
+
+    def __init__(self, kind: str) -> None:
+        if kind not in A.SCOPE_KINDS:
+            raise ValueError(f"unknown scope kind {kind!r}")
+        self.kind = kind
+        self.prev_m = False   # the mode at the last tick fed
+        self.seen = False     # before/onlyBefore: M so far; after/onlyAfter: a fall so far
+        self.ones = np.ones(0, np.bool_)   # (null: every tick; read only)
+
+    def chunk(self, M: np.ndarray | None, L: int) -> np.ndarray:
+        """The membership of the next ``L`` ticks (bool array), given their mode ``M``."""
+        kind = self.kind
+        if kind == "null" or M is None:
+            if len(self.ones) < L:
+                self.ones = np.ones(L, np.bool_)
+            return self.ones[:L]
+        if kind == "in":
+            return np.asarray(M, np.bool_)
+        if kind in ("notin", "onlyIn"):
+            return ~M
+        if kind in ("before", "onlyBefore"):
+            event = M
+        else:  # after, onlyAfter: the ticks where M falls (!M just after M)
+            event = ~M
+            event[0] &= self.prev_m
+            event[1:] &= M[:-1]
+        seen = np.logical_or.accumulate(event)
+        if self.seen:
+            seen[:] = True
+        self.seen = bool(seen[-1])
+        self.prev_m = bool(M[-1])
+        return seen if kind in ("onlyBefore", "after") else ~seen
+
+
+def scope_intervals(kind: str, mode: np.ndarray | None, n: int) -> list[Interval]:
+    """The scope intervals ``(s, e)`` of ``n`` ticks whose scope mode is ``mode`` (None for
+    ``null``), in order: the runs of their membership (module docstring, point 1; for
+    ``only*`` scopes the intervals of the complement)."""
+    if n == 0:
+        return []
+    M = None if mode is None else np.array(mode[:n], np.bool_)
+    d = np.diff(_Membership(kind).chunk(M, n).astype(np.int8), prepend=np.int8(0),
+                append=np.int8(0))
+    return list(zip(np.flatnonzero(d == 1).tolist(), (np.flatnonzero(d == -1) - 1).tolist()))
+
+
+def trigger_ticks(cond: str, C: np.ndarray | None, I: np.ndarray, starts: np.ndarray,
+                  last_ci: bool) -> np.ndarray:
+    """The trigger points (local ticks, ascending) of a chunk whose membership is ``I``
+    (module docstring, point 2): the interval ``starts`` (``null`` condition), the ticks in
+    an interval where ``C`` holds (``holding``), or where ``C & I`` rises, ``last_ci``
+    being its value at the tick before the chunk (``regular``)."""
+    if cond == "null":
+        return starts
+    assert C is not None  # (a condition other than null has its truth)
+    CI = C & I
+    if cond == "holding":
+        return np.flatnonzero(CI)
+    rise = np.diff(CI.view(np.int8), prepend=np.int8(last_ci))
+    return np.flatnonzero(rise == 1)
+
+
+# --------------------------------------------------------------------------- the stream
+class IntervalStream:
+    """FRET's interval semantics of one requirement over a trace fed a chunk at a time
+    (module docstring): :meth:`finish` gives the :class:`Evidence` of the ticks fed.
+
+    Args:
+        req: a parsed, not free-form requirement.
+        duration_ticks: the timing's duration in ticks (``within``/``for``/``after``), as
+            converted by the compiler (``Formalization.ticks``); None reads the duration's
+            amount as ticks.
+        limit: the most violations listed (all are counted).
+        record: keep every scope interval and trigger point (:attr:`intervals`,
+            :attr:`triggers`): memory that grows with them, for a whole trace.
+
+    Raises:
+        EvidenceUnsupported: ``req`` is free-form; a fractional duration without
+            ``duration_ticks``; a negative duration.
+
+    Attributes:
+        n: ticks fed so far.
+        pointwise: its expressions read one tick each (module docstring): fed any chunks;
+            else fed the whole trace as one chunk.
+    """
+
+    def __init__(self, req: A.Requirement, duration_ticks: int | None, *,
+                 limit: int = MAX_LISTED, record: bool = False) -> None:
+        if req.freeform or req.response is None:
+            raise EvidenceUnsupported("a free-form requirement has no semantics")
+        self._req = req
+        self._response: A.Expr = req.response
+        # the expressions evaluated (None where the requirement has none)
+        self._mode = req.scope.mode if req.scope.kind != "null" else None
+        self._cond = req.condition.expr if req.condition.kind != "null" else None
+        self._stop = req.timing.stop if req.timing.kind in A.STOP_TIMINGS else None
+        self.pointwise = _temporal_function(req) is None
+        timing, negate = req.timing.kind, req.scope.kind.startswith("only")
+        k = duration_of(req, duration_ticks) or 0
+        if k < 0:
+            raise EvidenceUnsupported(f"a negative duration ({k} ticks)")
+        self._scope = _Membership(req.scope.kind)
+        self._obligation = (Bounded(timing, negate, k) if timing in BOUNDED
+                            else Group(timing, negate, limit))
+        self._ledger = Ledger(timing, negate, k, limit)
+        self.n = 0
+        self._in = False          # the last tick fed is in an interval
+        self._last_ci = False     # ... and its condition held
+        self._last_time = 0
+        self._last_R = False
+        self._result: tuple[Evidence, dict[int, int]] | None = None
+        self._record: tuple[list[np.ndarray], list[np.ndarray], list[np.ndarray]] | None = (
+            ([], [], []) if record else None)
+        #: called with each chunk's trigger points (the trace's tick of the chunk's first,
+        #: the local trigger ticks, the local interval starts, the start of the interval
+        #: open before the chunk or None, the chunk's times): the definite triggers of
+        #: :class:`fretc.monitors.definite_stream.DefiniteStream`
+        self.on_triggers: Callable[..., None] | None = None
+
+    def feed(self, columns: Mapping[str, np.ndarray], k: int, times: np.ndarray,
+             favour: Any = None) -> None:
+        """Take the next ``k`` ticks (the trace's ticks ``n .. n+k-1``).
+
+        Args:
+            columns: FRET variable (or printed uninterpreted call) -> array of at least ``k``
+                values; a boolean variable as ``bool``, ``uint8`` 0/1 or ``float64`` 0/1,
+                which may change from chunk to chunk.
+            k: ticks in the chunk (0 is allowed).
+            times: ``int64`` array of at least ``k`` tick times (ns).
+            favour: where the chunk's condition, response and stop condition are unknown
+                (bool arrays ``C``, ``R``, ``S`` of at least ``k``:
+                :class:`fretc.monitors.unknowns.Unknowns` over the chunk): there they take
+                the value that meets the obligation (no trigger, the response the timing
+                wants, the stop condition that ends it), so the failures left are those the
+                known ticks make (:func:`favoured`); None: the columns as they are.
+
+        Raises:
+            KeyError: a variable without a column.
+            EvidenceUnsupported: an uninterpreted function without a column.
+            ValueError: a column or ``times`` shorter than ``k``; a feed after
+                :meth:`finish`; a second chunk of a requirement that is not pointwise.
+        """
+        if self._result is not None:
+            raise ValueError("the interval stream is finished")
+        if k <= 0:
+            self.feed_signals(None, NONE, None, None, k, NONE)  # (raises for k < 0)
+            return
+        M, R, C, S = self._signals(columns, k)
+        if favour is not None:
+            R, C, S = favoured(self._req, R, C, S, favour)
+        self.feed_signals(M, R, C, S, k, times)
+
+    def _signals(self, columns: Mapping[str, np.ndarray], k: int
+                 ) -> tuple[np.ndarray | None, np.ndarray, np.ndarray | None, np.ndarray | None]:
+        """The chunk's mode, response, condition and stop condition (module docstring).
+
+        Raises:
+            ValueError: a second chunk of a requirement that is not pointwise."""
+        ex: ColumnExpressions
+        if self.pointwise:
+            ex = _ChunkExpressions(columns, k, self.n)
+            M = ex.bool(self._mode)[:k] if self._mode is not None else None
+        elif self.n:
+            raise ValueError(f"{_temporal_function(self._req)} (fed the whole trace as one "
+                             "chunk)")
+        else:
+            M = scope_mode(self._req, columns, k)
+            left, right = endpoints(self._req.scope.kind, M, k)
+            ex = ColumnExpressions(columns, k, left, right)
+        R = ex.bool(self._response)[:k]
+        C = ex.bool(self._cond)[:k] if self._cond is not None else None
+        S = ex.bool(self._stop)[:k] if self._stop is not None else None
+        return M, R, C, S
+
+    def feed_signals(self, M: np.ndarray | None, R: np.ndarray, C: np.ndarray | None,
+                     S: np.ndarray | None, k: int, times: np.ndarray) -> None:
+        """Take the next ``k`` ticks as their signals: the scope mode ``M`` (None for the
+        ``null`` scope), the response ``R``, the condition ``C`` and the stop condition
+        ``S`` (bool arrays of at least ``k``; None where the requirement has none), and
+        their ``times``. Raises ValueError as :meth:`feed`."""
+        if self._result is not None:
+            raise ValueError("the interval stream is finished")
+        if k < 0:
+            raise ValueError(f"a chunk of {k} ticks")
+        if k == 0:
+            return
+        times = np.asarray(times, np.int64)[:k]
+        if len(times) < k:
+            raise ValueError(f"{len(times)} tick times for {k} ticks")
+        M = M[:k] if M is not None else None
+        self._step(self._scope.chunk(M, k), R[:k], C[:k] if C is not None else None,
+                   S[:k] if S is not None else None, times, final=False)
+        self.n += k
+
+    def _step(self, I: np.ndarray, R: np.ndarray, C: np.ndarray | None,
+              S: np.ndarray | None, times: np.ndarray, final: bool) -> None:
+        """Move the semantics through one chunk of membership ``I`` and signals."""
+        L = len(I)
+        if self._req.scope.kind == "null" and not final:   # one interval: the whole trace
+            starts = closes = NONE
+            if self.n == 0:
+                starts = np.zeros(1, np.int64)
+        else:   # the ticks where the membership changes
+            edges = np.flatnonzero(I[1:] != I[:-1]) + 1
+            if bool(I[0]) != self._in:
+                edges = np.concatenate((np.zeros(1, np.int64), edges))
+            opened = I[edges]
+            starts, closes = edges[opened], edges[~opened] - 1
+        T = NONE
+        if not final:
+            T = trigger_ticks(self._req.condition.kind, C, I, starts, self._last_ci)
+            if C is not None:
+                self._last_ci = bool(C[-1] & I[-1])
+        if self.on_triggers is not None and not final:
+            open_interval = self._ledger.open if self._in else None
+            self.on_triggers(self.n, T, starts,
+                             open_interval[0] if open_interval is not None else None, times)
+        if self._record is not None:
+            for kept, ticks in zip(self._record, (starts, closes, T)):
+                kept.append(self.n + ticks)
+        ch = Chunk(self.n, L, R, S, T, closes, self._in, times, self._last_time,
+                   self._last_R, final)
+        ledger = self._ledger
+        awaiting = self._obligation.resolves and ledger.awaiting()
+        count, rows, late = self._obligation.chunk(ch, ledger.room(), awaiting)
+        ledger.chunk(ch, starts, count, rows, late)
+        self._in = bool(I[-1])
+        self._last_time = int(times[-1])
+        self._last_R = bool(R[-1])
+
+    def finish(self) -> tuple[Evidence, dict[int, int]]:
+        """The evidence of the ticks fed, and the time (as fed) of every tick ``< n`` it
+        names: its first interval's ends, its first trigger, and each listed violation's
+        trigger, interval ends, window ends and violation tick. Later calls return the same;
+        :meth:`feed` then raises.
+
+        Raises:
+            ValueError: no tick was fed (the interval semantics needs one).
+        """
+        if self._result is not None:
+            return self._result
+        if self.n < 1:
+            raise ValueError("the interval semantics needs at least one tick")
+        if self._in:  # close the open interval at the last tick
+            none = np.zeros(1, np.bool_)
+            self._step(none, none, None, none, np.zeros(1, np.int64), final=True)
+        self._result = self._ledger.evidence(self.n)
+        return self._result
+
+    @property
+    def intervals(self) -> list[Interval]:
+        """Every scope interval ``(s, e)`` of the ticks fed, in order (after :meth:`finish`,
+        of a stream made with ``record``)."""
+        assert self._record is not None and self._result is not None  # (recorded, finished)
+        starts, closes = (np.concatenate(x).tolist() for x in self._record[:2])
+        return list(zip(starts, closes))
+
+    @property
+    def triggers(self) -> np.ndarray:
+        """Every trigger point of the ticks fed, ascending (``int64``; of a stream made with
+        ``record``)."""
+        assert self._record is not None  # (recorded)
+        return np.concatenate(self._record[2]) if self._record[2] else NONE
+
+
+def _tick_times(n: int) -> np.ndarray:
+    """Times for a trace fed without any: each tick's index."""
+    return np.arange(max(n, 0), dtype=np.int64)
+
+
+def evaluate_requirement(req: A.Requirement, columns: Mapping[str, np.ndarray], n: int,
+                         duration_ticks: int | None = None, favour: Any = None) -> Evidence:
+    """Decide ``req`` on a whole trace of ``n`` ticks by FRET's interval semantics: an
+    :class:`IntervalStream` fed it as one chunk.
+
+    Args:
+        req: a parsed (not free-form) requirement.
+        columns: FRET variable -> 1-D array of ``n`` values (bool or numeric).
+        n: number of ticks (>= 1).
+        duration_ticks: as :class:`IntervalStream`'s.
+        favour: as :meth:`IntervalStream.feed`'s (the unknown ticks of the parts).
+
+    Raises:
+        EvidenceUnsupported: free-form, or an uninterpreted function.
+        KeyError: a variable missing from ``columns``.
+        ValueError: ``n`` < 1.
+    """
+    s = IntervalStream(req, duration_ticks)
+    s.feed(columns, n, _tick_times(n), favour)
+    return s.finish()[0]
+
+
 def verdict_of(req: A.Requirement, columns: Mapping[str, np.ndarray], n: int,
                duration_ticks: int | None = None) -> str:
     """FRET's verdict of ``req`` on a finite trace as a word: ``"satisfied"``,
@@ -397,3 +569,41 @@ def verdict_of(req: A.Requirement, columns: Mapping[str, np.ndarray], n: int,
     except EvidenceUnsupported:
         return "unknown"
     return "violated" if not ev.holds else ("vacuous" if ev.vacuous else "satisfied")
+
+
+@dataclass
+class Triggered:
+    """Every scope interval and trigger of a requirement on a whole trace
+    (:func:`every_trigger`).
+
+    Attributes:
+        R, C, S: the response, condition and stop condition at each tick (C, S None
+            where the requirement has none).
+        intervals: the scope intervals ``(s, e)``, in order.
+        triggers: the trigger points of each interval (lists of ticks, ascending).
+        failed: trigger point -> its failed obligation (every one), as the evidence lists it.
+    """
+
+    R: np.ndarray
+    C: np.ndarray | None
+    S: np.ndarray | None
+    intervals: list[Interval]
+    triggers: list[list[int]]
+    failed: dict[int, Violation]
+
+
+def every_trigger(req: A.Requirement, columns: Mapping[str, np.ndarray], n: int,
+                  duration_ticks: int | None = None) -> Triggered:
+    """Every scope interval, trigger and failed obligation of ``req`` on a whole trace of
+    ``n >= 1`` ticks (:class:`Triggered`), by an :class:`IntervalStream` fed it as one chunk
+    (the questions asked per trigger: trials, obligations open at a damage). Errors as
+    :func:`evaluate_requirement`."""
+    s = IntervalStream(req, duration_ticks, limit=_ALL, record=True)
+    M, R, C, S = s._signals(columns, n)
+    s.feed_signals(M, R, C, S, n, _tick_times(n))
+    ev, _times = s.finish()
+    intervals = s.intervals
+    ticks = s.triggers
+    cut = np.searchsorted(ticks, [e for _s, e in intervals], side="right")
+    triggers = [x.tolist() for x in np.split(ticks, cut[:-1])] if intervals else []
+    return Triggered(R, C, S, intervals, triggers, {v.trigger_tick: v for v in ev.listed})

@@ -30,7 +30,7 @@ import numpy as np
 
 from fretc.compiler.ir import Node
 from fretc.fretish import ast as A
-from fretc.monitors.interval import Evidence, Violation, scope_of, trigger_points
+from fretc.monitors.interval import Evidence, Violation, every_trigger
 from fretc.monitors.unknowns import Unknowns
 
 __all__ = ["definite_evidence", "verdict_under_nan", "nan_rule_judge"]
@@ -105,10 +105,9 @@ def definite_evidence(req: A.Requirement, ev: Evidence, u: Unknowns,
             listed.append(w)
     triggers = 0
     first_trigger = None
-    intervals = scope_of(req, columns, u.n)
-    C = _condition(req, columns, u.n)
-    for s, e in intervals:
-        for t in trigger_points(cond, C, s, e):
+    got = every_trigger(req, columns, u.n, 0)
+    for (s, _e), points in zip(got.intervals, got.triggers):
+        for t in points:
             if u.in_scope_known(t, s, scope) and u.trigger_known(t, s, cond):
                 triggers += 1
                 first_trigger = t if first_trigger is None else first_trigger
@@ -117,12 +116,3 @@ def definite_evidence(req: A.Requirement, ev: Evidence, u: Unknowns,
                     violation=listed[0] if listed else None, ticks=ev.ticks,
                     first_interval=ev.first_interval, first_trigger=first_trigger,
                     listed=listed)
-
-
-def _condition(req: A.Requirement, columns, n: int) -> np.ndarray | None:
-    """The condition's truth at each tick as sampled (None without one)."""
-    if req.condition.kind == "null":
-        return None
-    from fretc.monitors.interval import trace_signals  # the same Left/Right as the evidence
-
-    return trace_signals(req, columns, n)[1]

@@ -48,12 +48,12 @@ def _trigger_fault() -> Iterator[None]:
     ``whenever``), not only where they become true."""
     from fretc.monitors import interval
 
-    original = interval.trigger_points
+    original = interval.trigger_ticks
 
-    def broken(cond: str, C: Any, s: int, e: int) -> list[int]:
-        return original("holding" if cond == "regular" else cond, C, s, e)
+    def broken(cond: str, C: Any, I: Any, starts: Any, last_ci: bool) -> Any:
+        return original("holding" if cond == "regular" else cond, C, I, starts, last_ci)
 
-    with _replaced(interval, "trigger_points", broken):
+    with _replaced(interval, "trigger_ticks", broken):
         yield
 
 

@@ -18,7 +18,7 @@ from hypothesis import strategies as st
 from fretc.fretish import parse
 from fretc.monitors.definite_stream import DefiniteStream, _RunMask, _Runs
 from fretc.monitors.interval import evaluate_requirement
-from fretc.monitors.interval_stream import stream_unsupported
+from fretc.monitors.interval import stream_unsupported
 from fretc.monitors.judge3 import definite_evidence
 from fretc.monitors.unknowns import Unknowns, possible_trigger
 

@@ -17,7 +17,7 @@ from hypothesis import strategies as st
 from fretc.compiler import evaluate, ir
 from fretc.audit.log import summarize_clocks
 from fretc.monitors import arrays, stepwise
-from fretc.monitors.interval import trigger_points
+from fretc.monitors.interval import trigger_ticks
 
 from _monitor_helpers import KEYS, compiled, load_module, random_trace, requirement, samples
 
@@ -48,10 +48,17 @@ def test_trigger_points_follow_fret_definition(values, data):
     n = len(C)
     s = data.draw(st.integers(0, n - 1))
     e = data.draw(st.integers(s, n - 1))
-    assert trigger_points("null", None, s, e) == [s]
-    assert trigger_points("holding", C, s, e) == [t for t in range(s, e + 1) if C[t]]
+    inside = np.zeros(n, np.bool_)  # (the interval's membership, its start)
+    inside[s:e + 1] = True
+    starts = np.array([s])
+
+    def trigger_points(cond, C):
+        return trigger_ticks(cond, C, inside, starts, False).tolist()
+
+    assert trigger_points("null", None) == [s]
+    assert trigger_points("holding", C) == [t for t in range(s, e + 1) if C[t]]
     # regular: C becomes true, or holds at the interval's first point
-    assert trigger_points("regular", C, s, e) == [
+    assert trigger_points("regular", C) == [
         t for t in range(s, e + 1) if C[t] and (t == s or not C[t - 1])]
 
 

@@ -1,9 +1,11 @@
-"""The interval stream (monitors/interval_stream.py) against the whole-trace interval semantics
-(:func:`fretc.monitors.interval.evaluate_requirement`): for every requirement it takes, every
-trace and every split of the trace into chunks (chunks of 0 and 1 tick, uneven ones), its
-:class:`Evidence` must equal the whole trace's (every field, each listed violation's window,
-violation tick and reason included) and the times it gives must be those of the ticks the
-evidence names, as fed.
+"""The interval semantics fed a chunk at a time (:class:`fretc.monitors.interval.IntervalStream`)
+at every chunk boundary: for every requirement it takes in chunks, every trace and every split
+of the trace into chunks (chunks of 0 and 1 tick, uneven ones), its :class:`Evidence` must
+equal the one of the whole trace fed as one chunk (:func:`fretc.monitors.interval.
+evaluate_requirement`: every field, each listed violation's window, violation tick and reason
+included) and the times it gives must be those of the ticks the evidence names, as fed. What
+the whole trace's evidence must be is tested against FRET's own verdicts, the generated
+monitors and an independent oracle (test_evidence.py, test_evidence_functions.py).
 
 * random sentences of tests/differential.py's generator (the ones the stream refuses must be
   exactly those using one of FRET's temporal functions), on short random traces and on longer
@@ -30,9 +32,8 @@ from hypothesis import strategies as st
 
 from fretc.fretish import ast as A
 from fretc.fretish import parse
-from fretc.monitors.interval import (MAX_LISTED, Evidence, EvidenceUnsupported,
-                                     evaluate_requirement)
-from fretc.monitors.interval_stream import NOT_POINTWISE, IntervalStream, stream_unsupported
+from fretc.monitors.interval import (MAX_LISTED, NOT_POINTWISE, Evidence, EvidenceUnsupported,
+                                     IntervalStream, evaluate_requirement, stream_unsupported)
 
 from _monitor_helpers import compiled, requirement
 from differential import BOOL_VARS, MODE_VARS, NUM_VARS, random_requirement, random_trace
@@ -137,8 +138,7 @@ def run_sentences(seed: int, sentences: int, short: int, long: int) -> tuple[int
         if why is not None:
             assert uses_temporal_function(parse(text)), f"{text}: refused ({why})"
             assert "temporal function" in why
-            with pytest.raises(EvidenceUnsupported, match="temporal function"):
-                IntervalStream(parse(text), None)
+            two_chunks(parse(text), rnd)
             refused += 1
             continue
         assert not uses_temporal_function(parse(text)), text
@@ -153,6 +153,20 @@ def run_sentences(seed: int, sentences: int, short: int, long: int) -> tuple[int
             check(req, ticks, cols, n, rnd, text, sizes=SIZES + (150,))
         taken += 1
     return taken, refused
+
+
+def two_chunks(req: A.Requirement, rnd: random.Random) -> None:
+    """A requirement with a temporal function is judged over one chunk, the whole trace,
+    and refuses a second chunk."""
+    n = rnd.randint(2, 20)
+    cols = trace_columns(random_trace(rnd, n))
+    s = IntervalStream(req, None)
+    s.feed(cols, 1, np.zeros(1, np.int64))
+    with pytest.raises(ValueError, match="temporal function"):
+        s.feed(cols, 1, np.ones(1, np.int64))
+    whole = IntervalStream(req, None)
+    whole.feed(cols, n, time_of(np.arange(n, dtype=np.int64)))
+    assert whole.finish()[0] == evaluate_requirement(req, cols, n)
 
 
 @pytest.mark.parametrize("seed", range(3))
@@ -282,7 +296,7 @@ def test_uninterpreted_functions_read_their_column_as_the_whole_trace_does():
     "prevOcc(p, q)", "nextOcc(p, q)", "(at the previous occurrence of p, q)",
     "(at the next occurrence of p, q)", "preBool(false, r)", "preInt(0, x) > 1",
     "preReal(0.0, x) > 1"])
-def test_temporal_functions_are_refused(response):
+def test_temporal_functions_are_judged_in_one_chunk(response):
     for text in (f"the sw shall always satisfy {response}",
                  f"in m mode upon {response} the sw shall within 2 ticks satisfy r",
                  f"while {response} the sw shall always satisfy r",
@@ -290,8 +304,12 @@ def test_temporal_functions_are_refused(response):
         req = parse(text)
         why = stream_unsupported(req)
         assert why is not None and "temporal function" in why, text
-        with pytest.raises(EvidenceUnsupported, match="temporal function"):
-            IntervalStream(req, None)
+        cols = {v: np.ones(3, np.bool_) for v in ("m", "c", "r", "p", "q")}
+        cols["x"] = np.ones(3)
+        s = IntervalStream(req, None)
+        s.feed(cols, 2, np.arange(2))
+        with pytest.raises(ValueError, match="temporal function"):
+            s.feed(cols, 1, np.arange(1))
 
 
 def test_other_refusals_and_errors():

@@ -83,11 +83,11 @@ def test_a_seeded_fault_is_detected_and_undone(tmp_path: Path, few_traces, fault
 def test_a_fault_is_undone_when_the_block_raises():
     from fretc.monitors import interval
 
-    original = interval.trigger_points
+    original = interval.trigger_ticks
     with pytest.raises(RuntimeError), faults.FAULTS["semantics-trigger"].seed():
-        assert interval.trigger_points is not original
+        assert interval.trigger_ticks is not original
         raise RuntimeError("stop")
-    assert interval.trigger_points is original
+    assert interval.trigger_ticks is original
 
 
 def test_a_check_that_fails_raises_or_cannot_run_is_reported_so(tmp_path: Path):

@@ -11,8 +11,7 @@ import numpy as np
 import pytest
 
 from fretc.fretish import parse
-from fretc.monitors.interval import scope_intervals, trigger_points
-from fretc.monitors.obligations import ObligationChecker
+from fretc.monitors.interval import IntervalStream, scope_intervals, trigger_ticks
 from fretc.reports.semantics_diagram import CELL, LEFT, MAX_DRAWN, layout, svg
 from tests._shared import jsonl, params
 
@@ -71,8 +70,11 @@ def test_diagram_draws_fret_semantics(text):
     assert lay.intervals, "a diagram shows at least one scope interval"
     # the triggers: drawn, and the audit's trigger points in each interval
     cond = None if lay.condition is None else np.array(lay.condition)
-    expected = [t for s, e in lay.intervals for t in trigger_points(req.condition.kind, cond,
-                                                                    s, e)]
+    inside = np.zeros(lay.n, np.bool_)
+    for s, e in lay.intervals:
+        inside[s:e + 1] = True
+    starts = np.array([s for s, _e in lay.intervals], np.int64)
+    expected = trigger_ticks(req.condition.kind, cond, inside, starts, False).tolist()
     ticks = [int(p.get("data-tick")) for p in root.iter("{http://www.w3.org/2000/svg}path")
              if p.get("class") == "trigger"]
     assert ticks == list(lay.triggers) == expected
@@ -111,19 +113,22 @@ def _check_duration(req, lay, root) -> None:
 
 
 def _check_windows_against_the_audit(req, lay) -> None:
-    """Each trigger's drawn windows against the audit's obligation checker: the response
+    """Each trigger's drawn windows against the audit's interval semantics: the response
     laid on them meets the obligation, with everything else adverse; moved one tick out of
     a window ('some') or broken at a window's end ('every'), it fails."""
     if req.timing.kind == "after" and lay.negated:
         return  # the negated "after" is not a window conjunction (the legend says so)
     S = None if lay.stop is None else np.array(lay.stop)
     for t in sorted({w.trigger for w in lay.windows}):
-        e = next(b for a, b in lay.intervals if a <= t <= b)
         mine = [w for w in lay.windows if w.trigger == t]
 
-        def verdict(R, t=t, e=e):
-            return ObligationChecker(req.timing.kind, lay.negated, R, S, lay.drawn_k
-                                     ).check(t, e) is None
+        def verdict(R, t=t):
+            judged = IntervalStream(req, lay.drawn_k or 0, limit=lay.n + 1)
+            mode = None if lay.mode is None else np.array(lay.mode)
+            C = None if lay.condition is None else np.array(lay.condition)
+            judged.feed_signals(mode, R, C, S if S is not None else np.zeros(lay.n, bool),
+                                lay.n, np.arange(lay.n))
+            return all(v.trigger_tick != t for v in judged.finish()[0].listed)
 
         base = np.full(lay.n, not mine[0].value)
         for w in mine:

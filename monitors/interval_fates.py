@@ -1,73 +1,41 @@
-"""FRET's interval semantics over a trace fed a chunk of ticks at a time: the same
-:class:`~fretc.monitors.interval.Evidence` as :func:`fretc.monitors.interval.evaluate_requirement`
-over the whole trace, in memory independent of the trace's length.
+"""The fates of a requirement's triggers under FRET's timings, decided a chunk of ticks at a
+time: the obligation part of :class:`fretc.monitors.interval.IntervalStream` (FRET's interval
+semantics, ``../shared/fretish/README.md`` section 4; each timing's obligation, window,
+violation tick and reason as :data:`fretc.monitors.obligations.OBLIGATIONS` words them).
 
-What it computes is :mod:`fretc.monitors.interval`'s (FRET's interval semantics,
-``../shared/fretish/README.md`` sections 2-4; :mod:`fretc.monitors.obligations` for each
-timing's obligation, window, violation tick and reason): the scope intervals, the trigger
-points, the obligation of each trigger, counted and listed (:data:`~fretc.monitors.interval.MAX_LISTED`
-of them) exactly as the whole-trace function does, for every split of the trace into chunks.
+* **Bounded timings** (``immediately``, ``next``, ``within``, ``for``, ``after``: :class:`Bounded`)
+  decide a trigger ``t`` from the first tick at or after ``t`` (``t+1`` for ``next``) where
+  their event holds (``R``, ``!R`` or ``R != want``), its deadline (``t``, ``t+1``, ``t+k``,
+  ``t+k+1``) and the interval end; a trigger waits (its tick, time, and the first event
+  seen) until the trace reaches its deadline or its interval closes: at most ``k + 1`` of
+  them wait.
+* **The other timings** (:class:`Group`): the triggers waiting in the open interval share
+  their fate, so they are one group: a count and the first ``limit`` (tick, time) pairs.
+  ``eventually``/``null`` (``R``), ``always`` (``!R``), ``never`` (``R``) either clear the
+  group at their event and fail it when the interval closes, or (``only*`` scopes for
+  ``eventually``, the plain scopes for ``always``/``never``) fail it at their event;
+  ``until``/``before`` fail it at one event (``R != want`` outside ``S``, or ``S``) and clear
+  it at another (``S``, or ``R == want``), which also ends the windows of the triggers that
+  failed since; ``finally`` fails the group at the interval end if ``R`` there is not what it
+  wants.
+* **Violations** are found in trigger order; the first ``limit`` are kept as records until
+  their interval closes (a :class:`~fretc.monitors.evidence.Violation` names its interval
+  end, and some windows end there), then made with their reason (:func:`_reason`) by the
+  :class:`Ledger`.
 
-How, chunk by chunk (all of it vectorized with numpy over the chunk's ticks):
-
-1. **Scope intervals** are the maximal runs of one membership flag: ``null`` every tick;
-   ``in`` ``M``; ``notin``/``onlyIn`` ``!M``; ``before`` "no ``M`` so far"; ``onlyBefore``
-   "some ``M`` so far"; ``after`` "``M`` has fallen (``!M`` right after ``M``) so far";
-   ``onlyAfter`` "``M`` has not fallen yet". An interval is closed at ``e`` when the tick after
-   ``e`` is out of it (or at the end of the trace, in :meth:`IntervalStream.finish`).
-2. **Triggers**: the interval starts (``null`` condition), the ticks in an interval where ``C``
-   holds (``holding``), or where ``C & in-interval`` rises (``regular``).
-3. **Obligations.** The bounded timings (``immediately``, ``next``, ``within``, ``for``,
-   ``after``) decide a trigger ``t`` from the first tick at or after ``t`` (``t+1`` for
-   ``next``) where their event holds (``R``, ``!R`` or ``R != want``), its deadline (``t``,
-   ``t+1``, ``t+k``, ``t+k+1``) and the interval end; a trigger waits (its tick, time, and the
-   first event seen) until the trace reaches its deadline or its interval closes: at most
-   ``k + 1`` of them wait. For the other timings the triggers waiting in the open interval share
-   their fate, so they are one group: a count and the first :data:`MAX_LISTED` (tick, time)
-   pairs. ``eventually``/``null`` (``R``), ``always`` (``!R``), ``never`` (``R``) either clear
-   the group at their event and fail it when the interval closes, or (``only*`` scopes for
-   ``eventually``, the plain scopes for ``always``/``never``) fail it at their event;
-   ``until``/``before`` fail it at one event (``R != want`` outside ``S``, or ``S``) and clear it
-   at another (``S``, or ``R == want``), which also ends the windows of the triggers that
-   failed since; ``finally`` fails the group at the interval end if ``R`` there is not what it
-   wants.
-4. **Violations** are found in trigger order; the first :data:`MAX_LISTED` are kept as records
-   until their interval closes (a :class:`~fretc.monitors.interval.Violation` names its
-   interval end, and some windows end there), then made with the same reason strings as
-   :class:`~fretc.monitors.obligations.ObligationChecker`'s.
-
-Expressions must be *pointwise* (their value at a tick reads that tick's column values only):
-FRET's temporal functions (:data:`NOT_POINTWISE`, and the occurrence phrases, which parse to
-``prevOcc``/``nextOcc``) are refused (:func:`stream_unsupported`). ``FTP`` is evaluated with the
-chunk's offset (true at global tick 0 only); uninterpreted functions read the column named by
-the printed call, as :class:`~fretc.monitors.expressions.ColumnExpressions` reads them.
-
-Memory: O(chunk + k + :data:`MAX_LISTED`), ``k`` the duration in ticks of ``within``/``for``/
-``after`` (the waiting triggers, 32 bytes each); nothing grows with the number of ticks, of
-intervals or of triggers. CPU: O(chunk) numpy work per chunk (plus O(k) per chunk while
-triggers wait on a duration), Python work per chunk a constant, and per violation only for the
-first :data:`MAX_LISTED`; never a Python loop over ticks or triggers.
+All of it is vectorized with numpy over a chunk's ticks: never a Python loop over ticks or
+triggers, Python work per violation only for those listed.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 
-from fretc.fretish import ast as A
-from fretc.fretish.fret_since import SINCE
-from fretc.monitors.expressions import ColumnExpressions, EvidenceUnsupported
-from fretc.monitors.interval import MAX_LISTED, Evidence, Violation, duration_of, favoured
+from fretc.monitors.evidence import Evidence, Violation
 
-__all__ = ["IntervalStream", "stream_unsupported", "NOT_POINTWISE"]
-
-#: FRET's temporal functions: their value at a tick reads other ticks (and the scope's
-#: ``Left``/``Right``), so a chunk alone cannot evaluate them.
-NOT_POINTWISE = ("persisted", "occurred", "persists", "occurs", "prevOcc", "nextOcc",
-                 "preBool", "preInt", "preReal", SINCE)
+__all__ = ["Chunk", "Bounded", "Group", "Ledger", "BOUNDED", "NONE"]
 
 #: A global tick "not seen yet" (no such event so far, an interval still open).
 _INF = 1 << 62
@@ -75,9 +43,9 @@ _INF = 1 << 62
 #: the interval's end.
 _AWAIT = -2
 #: No ticks.
-_NONE = np.zeros(0, np.int64)
+NONE = np.zeros(0, np.int64)
 #: The timings whose triggers are decided one by one from a bounded look ahead.
-_BOUNDED = ("immediately", "next", "within", "for", "after")
+BOUNDED = ("immediately", "next", "within", "for", "after")
 
 #: A batch of violations found in one chunk, in trigger order: one row per violation,
 #: ``[t, time(t), lo, time(lo), hi, time(hi), vt, time(vt)]`` (window ``(lo, hi)``,
@@ -85,133 +53,8 @@ _BOUNDED = ("immediately", "next", "within", "for", "after")
 Rows = np.ndarray
 
 
-# --------------------------------------------------------------------------- expressions
-def _expressions(req: A.Requirement) -> list[tuple[str, A.Expr]]:
-    """(role, expression) of each expression the interval semantics evaluates for ``req``,
-    as :func:`fretc.monitors.interval.evaluate_requirement` reads them."""
-    out: list[tuple[str, A.Expr]] = []
-    if req.scope.kind != "null" and req.scope.mode is not None:
-        out.append(("scope condition", req.scope.mode))
-    if req.condition.kind != "null" and req.condition.expr is not None:
-        out.append(("condition", req.condition.expr))
-    if req.timing.kind in A.STOP_TIMINGS and req.timing.stop is not None:
-        out.append(("stop condition", req.timing.stop))
-    if req.response is not None:
-        out.append(("response", req.response))
-    return out
-
-
-class _ChunkExpressions(ColumnExpressions):
-    """:class:`ColumnExpressions` (FRET's endpoint-free forms, which equal the scoped ones for
-    pointwise expressions) over one chunk whose first tick is the trace's tick ``offset``:
-    ``FTP`` is true at the trace's tick 0 only."""
-
-    def __init__(self, columns: Mapping[str, np.ndarray], n: int, offset: int) -> None:
-        super().__init__(columns, n, free=True)
-        self.offset = offset
-
-    def bool(self, e: A.Expr) -> np.ndarray:
-        """As :meth:`ColumnExpressions.bool`, ``FTP`` read at the chunk's offset."""
-        if isinstance(e, A.Var) and e.name == "FTP":
-            return self.idx == -self.offset
-        return super().bool(e)
-
-
-class _AnyColumns(Mapping[str, np.ndarray]):
-    """Every name has an empty column: evaluating an expression over 0 ticks then raises only
-    what does not depend on the data (an arithmetic operator as a condition, a call the
-    compiler cannot print)."""
-
-    _EMPTY = np.zeros(0)
-
-    def __getitem__(self, key: str) -> np.ndarray:
-        return self._EMPTY
-
-    def __contains__(self, key: object) -> bool:
-        return True
-
-    def __iter__(self) -> Iterator[str]:
-        return iter(())
-
-    def __len__(self) -> int:
-        return 0
-
-
-def stream_unsupported(req: A.Requirement) -> str | None:
-    """None when :class:`IntervalStream` takes ``req``, else why not, in words: a free-form
-    sentence; an expression (scope condition, condition, stop condition, response) that uses
-    one of FRET's temporal functions (:data:`NOT_POINTWISE`, the occurrence phrases included);
-    or one the interval semantics cannot evaluate whatever the data (the reason
-    :class:`EvidenceUnsupported` gives). An uninterpreted function is taken: its column is
-    looked for in each chunk (:meth:`IntervalStream.feed`)."""
-    if req.freeform or req.response is None:
-        return "a free-form requirement has no semantics"
-    exprs = _expressions(req)
-    for role, e in exprs:
-        for x in A.walk(e):
-            if isinstance(x, A.Call) and x.name in NOT_POINTWISE:
-                return (f"the {role} uses FRET's temporal function {x.name}, whose value at "
-                        "a tick reads other ticks: the interval stream evaluates pointwise "
-                        "expressions only")
-    ex = _ChunkExpressions(_AnyColumns(), 0, 0)
-    for _role, e in exprs:
-        try:
-            ex.bool(e)
-        except EvidenceUnsupported as exc:
-            return str(exc)
-    return None
-
-
-def _duration(req: A.Requirement, duration_ticks: int | None) -> int:
-    """The timing's duration in ticks as :func:`evaluate_requirement` takes it
-    (:func:`~fretc.monitors.interval.duration_of`; 0 for the timings without one).
-
-    Raises:
-        EvidenceUnsupported: as ``duration_of``, and a negative duration."""
-    k = duration_of(req, duration_ticks) or 0
-    if k < 0:
-        raise EvidenceUnsupported(f"a negative duration ({k} ticks)")
-    return k
-
-
-# --------------------------------------------------------------------------- scopes
-class _Membership:
-    """Which ticks lie in a scope interval (for ``only*`` scopes: in an interval of the
-    complement), chunk by chunk; the intervals are the maximal runs of it."""
-
-    def __init__(self, kind: str) -> None:
-        self.kind = kind
-        self.prev_m = False   # the mode at the last tick fed
-        self.seen = False     # before/onlyBefore: M so far; after/onlyAfter: a fall so far
-        self.ones = np.ones(0, np.bool_)   # (null: every tick; read only)
-
-    def chunk(self, M: np.ndarray | None, L: int) -> np.ndarray:
-        """The membership of the next ``L`` ticks (bool array), given their mode ``M``."""
-        kind = self.kind
-        if kind == "null" or M is None:
-            if len(self.ones) < L:
-                self.ones = np.ones(L, np.bool_)
-            return self.ones[:L]
-        if kind == "in":
-            return np.asarray(M, np.bool_)
-        if kind in ("notin", "onlyIn"):
-            return ~M
-        if kind in ("before", "onlyBefore"):
-            event = M
-        else:  # after, onlyAfter: the ticks where M falls (!M just after M)
-            event = ~M
-            event[0] &= self.prev_m
-            event[1:] &= M[:-1]
-        seen = np.logical_or.accumulate(event)
-        if self.seen:
-            seen[:] = True
-        self.seen = bool(seen[-1])
-        self.prev_m = bool(M[-1])
-        return seen if kind in ("onlyBefore", "after") else ~seen
-
-
 @dataclass(slots=True)
-class _Chunk:
+class Chunk:
     """One chunk's signals, as the obligations read them (ticks are local: 0..L-1).
 
     Attributes:
@@ -224,7 +67,7 @@ class _Chunk:
         carried: an interval was open at tick ``n0 - 1``.
         times: the ticks' times; ``last_time``/``last_R``: the time and ``R`` of tick
             ``n0 - 1``.
-        final: the one virtual tick :meth:`IntervalStream.finish` feeds to close the open
+        final: the one virtual tick :meth:`fretc.monitors.interval.IntervalStream.finish` feeds to close the open
             interval at the trace's last tick (its own values never count).
     """
 
@@ -273,10 +116,10 @@ def _rows(t: np.ndarray, tt: np.ndarray, lo: np.ndarray, lot: np.ndarray, hi: np
 
 
 # --------------------------------------------------------------------------- bounded timings
-class _Bounded:
+class Bounded:
     """``immediately``, ``next``, ``within``, ``for``, ``after``: each trigger ``t`` decided
     from the first tick ``nx`` at or after ``t`` (``t + 1`` for ``next``) where the timing's
-    event holds, its deadline ``d`` and its interval end ``e`` (module docstring, point 3).
+    event holds, its deadline ``d`` and its interval end ``e`` (module docstring).
     A trigger waits, as ``[t, time(t), nx, time(nx)]`` (``nx`` :data:`_INF` until seen), until
     the trace reaches ``d`` or its interval closes."""
 
@@ -324,7 +167,7 @@ class _Bounded:
         late = ~early & (e >= d) & (nx != d)           # ... and R at t+k+1 when t+k+1 <= e
         return early | late, np.where(early, nx, d), np.where(early, hi0, d)
 
-    def _candidates(self, ch: _Chunk) -> np.ndarray:
+    def _candidates(self, ch: Chunk) -> np.ndarray:
         """The waiting triggers and the chunk's, as rows ``[t, time(t), nx, time(nx), e]``."""
         L, n0 = ch.L, ch.n0
         X = _index(None if ch.final else self._event(ch.R), L)
@@ -345,7 +188,7 @@ class _Bounded:
                         ch.times[np.minimum(x, L - 1)], np.where(z < L, n0 + z, _INF)), axis=1)
         return np.concatenate((w, new)) if len(w) else new
 
-    def chunk(self, ch: _Chunk, room: int, awaiting: bool
+    def chunk(self, ch: Chunk, room: int, awaiting: bool
               ) -> tuple[int, Rows | None, tuple[int, int] | None]:
         """Decide the triggers whose deadline the chunk reaches or whose interval it closes.
 
@@ -376,10 +219,10 @@ class _Bounded:
 
 
 # --------------------------------------------------------------------------- group timings
-class _Group:
+class Group:
     """``finally``, ``eventually``/``null``, ``always``, ``never``, ``until``, ``before``: the
-    triggers waiting in the open interval share their fate (module docstring, point 3), so
-    they are kept as one group: ``count`` and the first :data:`MAX_LISTED` (tick, time) pairs.
+    triggers waiting in the open interval share their fate (module docstring), so
+    they are kept as one group: ``count`` and the first ``limit`` (tick, time) pairs.
 
     Each chunk has *fail* events (the waiting triggers at or before one fail there) and
     *clear* events (they hold; for ``until``/``before`` the windows of the triggers failed
@@ -388,8 +231,9 @@ class _Group:
     what it wants) or hold.
     """
 
-    def __init__(self, timing: str, negate: bool) -> None:
+    def __init__(self, timing: str, negate: bool, limit: int) -> None:
         self.timing = "eventually" if timing == "null" else timing
+        self.limit = limit
         self.want = not negate
         self.off = 0
         if self.timing in ("until", "before"):
@@ -403,7 +247,7 @@ class _Group:
         #: a later event ends the windows of violations (until, before)
         self.resolves = self.kind in ("until", "before")
         self.count = 0
-        self.ticks = np.zeros((0, 2), np.int64)  # the first MAX_LISTED: (tick, time)
+        self.ticks = np.zeros((0, 2), np.int64)  # the first ``limit``: (tick, time)
 
     def _events(self, R: np.ndarray, S: np.ndarray | None
                 ) -> tuple[np.ndarray | None, np.ndarray | None]:
@@ -421,7 +265,7 @@ class _Group:
             return S, R if want else ~R
         return None, None
 
-    def _await(self, ch: _Chunk, C: np.ndarray, Z: np.ndarray) -> tuple[int, int] | None:
+    def _await(self, ch: Chunk, C: np.ndarray, Z: np.ndarray) -> tuple[int, int] | None:
         """The window end of the violations waiting for one (from earlier chunks), if this
         chunk's first clear event comes before their interval's end."""
         r0, z0 = int(C[0]), int(Z[0])
@@ -430,7 +274,7 @@ class _Group:
             return tick, int(ch.time(np.array(tick)))
         return None
 
-    def chunk(self, ch: _Chunk, room: int, awaiting: bool
+    def chunk(self, ch: Chunk, room: int, awaiting: bool
               ) -> tuple[int, Rows | None, tuple[int, int] | None]:
         """Move the group and the chunk's triggers through the chunk's events and interval
         ends.
@@ -469,7 +313,7 @@ class _Group:
         self._regroup(ch, P, ~(failed | cleared | closed))
         return count, rows, late
 
-    def _rows(self, ch: _Chunk, room: int, P: np.ndarray, bad: np.ndarray,
+    def _rows(self, ch: Chunk, room: int, P: np.ndarray, bad: np.ndarray,
               failed: np.ndarray, f: np.ndarray, z: np.ndarray, C: np.ndarray) -> Rows:
         """The first ``room`` violations of the positions ``P`` (-1: the group) that failed,
         at a fail event ``f`` or at their interval end ``z``."""
@@ -495,7 +339,7 @@ class _Group:
             rows[:, 2:4] = rows[:, 6:8]
         return rows
 
-    def _regroup(self, ch: _Chunk, P: np.ndarray, waiting: np.ndarray) -> None:
+    def _regroup(self, ch: Chunk, P: np.ndarray, waiting: np.ndarray) -> None:
         """The group after the chunk: the waiting ones of the positions ``P`` (-1: the
         group)."""
         keep = len(P) > 0 and P[0] < 0 and bool(waiting[0])
@@ -505,7 +349,7 @@ class _Group:
         if not keep:
             self.count, self.ticks = 0, self.ticks[:0]
         self.count += len(new)
-        room = MAX_LISTED - len(self.ticks)
+        room = self.limit - len(self.ticks)
         if room > 0 and len(new):
             add = new[:room]
             self.ticks = np.concatenate((self.ticks, np.stack((ch.n0 + add, ch.times[add]),
@@ -514,8 +358,9 @@ class _Group:
 
 # --------------------------------------------------------------------------- the evidence
 def _reason(timing: str, negate: bool, k: int, t: int, hi: int, vt: int, e: int) -> str:
-    """The reason :class:`~fretc.monitors.obligations.ObligationChecker` gives for a failed
-    trigger ``t`` (window end ``hi``, violation tick ``vt``, interval end ``e``)."""
+    """Why trigger ``t`` failed (window end ``hi``, violation tick ``vt``, interval end
+    ``e``), in tick numbers: the obligation of :data:`fretc.monitors.obligations.OBLIGATIONS`
+    that was missed."""
     rname = "!R" if negate else "R"
     if timing == "immediately":
         return f"{rname} does not hold at the trigger t={t}"
@@ -551,13 +396,13 @@ def _reason(timing: str, negate: bool, k: int, t: int, hi: int, vt: int, e: int)
     return f"the stop condition holds at {vt} before {rname} held (window [{t}, {hi}])"
 
 
-class _Ledger:
+class Ledger:
     """The counts, the first interval and trigger, and the violations listed: those of the
     open interval as rows until it closes, then as :class:`Violation` with the times of the
-    ticks they name."""
+    ticks they name: the first ``limit`` of them (all are counted)."""
 
-    def __init__(self, timing: str, negate: bool, k: int) -> None:
-        self.timing, self.negate, self.k = timing, negate, k
+    def __init__(self, timing: str, negate: bool, k: int, limit: int) -> None:
+        self.timing, self.negate, self.k, self.limit = timing, negate, k, limit
         self.intervals = self.triggers = self.violations = 0
         self.first_interval: list[int] | None = None   # [s, time, e, time], e -1 while open
         self.first_trigger: tuple[int, int] | None = None
@@ -567,7 +412,7 @@ class _Ledger:
 
     def room(self) -> int:
         """How many more violations may be listed."""
-        return MAX_LISTED - len(self.listed) - len(self.records)
+        return self.limit - len(self.listed) - len(self.records)
 
     def awaiting(self) -> bool:
         """Some violation of the open interval waits for its window's end."""
@@ -581,7 +426,7 @@ class _Ledger:
         v = Violation(t, (s, e), (lo, hi), vt, reason)
         self.listed.append((v, {t: tt, s: st, e: et, lo: lot, hi: hit, vt: vtt}))
 
-    def chunk(self, ch: _Chunk, starts: np.ndarray, count: int, rows: Rows | None,
+    def chunk(self, ch: Chunk, starts: np.ndarray, count: int, rows: Rows | None,
               late: tuple[int, int] | None) -> None:
         """Take one chunk's interval starts (local ticks), triggers and violations."""
         n0, closes = ch.n0, ch.closes
@@ -616,7 +461,7 @@ class _Ledger:
         else:
             self.open = None
 
-    def _place(self, ch: _Chunk, starts: np.ndarray, rows: Rows) -> None:
+    def _place(self, ch: Chunk, starts: np.ndarray, rows: Rows) -> None:
         """List the rows of intervals closed in the chunk; keep those of the open one."""
         n0, closes = ch.n0, ch.closes
         carried = int(ch.carried and self.open is not None)
@@ -651,154 +496,3 @@ class _Ledger:
         return ev, {t: x for t, x in times.items() if 0 <= t < n}
 
 
-# --------------------------------------------------------------------------- the stream
-class IntervalStream:
-    """FRET's interval semantics of one requirement over a trace fed a chunk at a time
-    (module docstring): :meth:`finish` gives what
-    :func:`~fretc.monitors.interval.evaluate_requirement` gives over the whole trace.
-
-    Args:
-        req: a parsed requirement that :func:`stream_unsupported` takes.
-        duration_ticks: the timing's duration in ticks (``within``/``for``/``after``), as
-            converted by the compiler (``Formalization.ticks``); None reads the duration's
-            amount as ticks.
-
-    Raises:
-        EvidenceUnsupported: ``req`` is free-form, uses a temporal function, or cannot be
-            evaluated whatever the data (:func:`stream_unsupported`'s reason); a fractional
-            duration without ``duration_ticks``; a negative duration.
-
-    Attributes:
-        n: ticks fed so far.
-    """
-
-    def __init__(self, req: A.Requirement, duration_ticks: int | None) -> None:
-        why = stream_unsupported(req)
-        if why is not None:
-            raise EvidenceUnsupported(why)
-        assert req.response is not None  # (stream_unsupported refuses a free-form one)
-        self._req = req
-        self._response: A.Expr = req.response
-        # the expressions evaluated (None where the requirement has none)
-        self._mode = req.scope.mode if req.scope.kind != "null" else None
-        self._cond = req.condition.expr if req.condition.kind != "null" else None
-        self._stop = req.timing.stop if req.timing.kind in A.STOP_TIMINGS else None
-        timing, negate = req.timing.kind, req.scope.kind.startswith("only")
-        k = _duration(req, duration_ticks)
-        self._scope = _Membership(req.scope.kind)
-        self._obligation = (_Bounded(timing, negate, k) if timing in _BOUNDED
-                            else _Group(timing, negate))
-        self._ledger = _Ledger(timing, negate, k)
-        self.n = 0
-        self._in = False          # the last tick fed is in an interval
-        self._last_ci = False     # ... and its condition held
-        self._last_time = 0
-        self._last_R = False
-        self._result: tuple[Evidence, dict[int, int]] | None = None
-        #: called with each chunk's trigger points (the trace's tick of the chunk's first,
-        #: the local trigger ticks, the local interval starts, the start of the interval
-        #: open before the chunk or None, the chunk's times): the definite triggers of
-        #: :class:`fretc.monitors.definite_stream.DefiniteStream`
-        self.on_triggers: Callable[..., None] | None = None
-
-    def feed(self, columns: Mapping[str, np.ndarray], k: int, times: np.ndarray,
-             favour: Any = None) -> None:
-        """Take the next ``k`` ticks (the trace's ticks ``n .. n+k-1``).
-
-        Args:
-            columns: FRET variable (or printed uninterpreted call) -> array of at least ``k``
-                values; a boolean variable as ``bool``, ``uint8`` 0/1 or ``float64`` 0/1,
-                which may change from chunk to chunk.
-            k: ticks in the chunk (0 is allowed).
-            times: ``int64`` array of at least ``k`` tick times (ns).
-            favour: where the chunk's condition, response and stop condition are unknown
-                (bool arrays ``C``, ``R``, ``S`` of at least ``k``:
-                :class:`fretc.monitors.unknowns.Unknowns` over the chunk): there they meet
-                the obligation, as :func:`~fretc.monitors.interval.evaluate_requirement`'s
-                ``favour`` sets them; None: the columns as they are.
-
-        Raises:
-            KeyError: a variable without a column.
-            EvidenceUnsupported: an uninterpreted function without a column.
-            ValueError: a column or ``times`` shorter than ``k``; a feed after :meth:`finish`.
-        """
-        if self._result is not None:
-            raise ValueError("the interval stream is finished")
-        if k < 0:
-            raise ValueError(f"a chunk of {k} ticks")
-        if k == 0:
-            return
-        times = np.asarray(times, np.int64)[:k]
-        if len(times) < k:
-            raise ValueError(f"{len(times)} tick times for {k} ticks")
-        ex = _ChunkExpressions(columns, k, self.n)
-        M = ex.bool(self._mode)[:k] if self._mode is not None else None
-        R = ex.bool(self._response)[:k]
-        C = ex.bool(self._cond)[:k] if self._cond is not None else None
-        S = ex.bool(self._stop)[:k] if self._stop is not None else None
-        if favour is not None:
-            R, C, S = favoured(self._req, R, C, S, favour)
-        self._step(self._scope.chunk(M, k), R, C, S, times, final=False)
-        self.n += k
-
-    def _triggers(self, I: np.ndarray, C: np.ndarray | None, starts: np.ndarray) -> np.ndarray:
-        """The local trigger points of a chunk with membership ``I`` (module docstring,
-        point 2)."""
-        cond = self._req.condition.kind
-        if cond == "null":
-            return starts
-        assert C is not None  # (a condition other than null has its truth)
-        CI = C & I
-        if cond == "holding":
-            return np.flatnonzero(CI)
-        rise = np.diff(CI.view(np.int8), prepend=np.int8(self._last_ci))
-        self._last_ci = bool(CI[-1])
-        return np.flatnonzero(rise == 1)
-
-    def _step(self, I: np.ndarray, R: np.ndarray, C: np.ndarray | None,
-              S: np.ndarray | None, times: np.ndarray, final: bool) -> None:
-        """Move the semantics through one chunk of membership ``I`` and signals."""
-        L = len(I)
-        if self._req.scope.kind == "null" and not final:   # one interval: the whole trace
-            starts = closes = _NONE
-            if self.n == 0:
-                starts = np.zeros(1, np.int64)
-        else:   # the ticks where the membership changes
-            edges = np.flatnonzero(I[1:] != I[:-1]) + 1
-            if bool(I[0]) != self._in:
-                edges = np.concatenate((np.zeros(1, np.int64), edges))
-            opened = I[edges]
-            starts, closes = edges[opened], edges[~opened] - 1
-        T = self._triggers(I, C, starts) if not final else starts
-        if self.on_triggers is not None and not final:
-            open_interval = self._ledger.open if self._in else None
-            self.on_triggers(self.n, T, starts,
-                             open_interval[0] if open_interval is not None else None, times)
-        ch = _Chunk(self.n, L, R, S, T, closes, self._in, times, self._last_time,
-                    self._last_R, final)
-        ledger = self._ledger
-        awaiting = self._obligation.resolves and ledger.awaiting()
-        count, rows, late = self._obligation.chunk(ch, ledger.room(), awaiting)
-        ledger.chunk(ch, starts, count, rows, late)
-        self._in = bool(I[-1])
-        self._last_time = int(times[-1])
-        self._last_R = bool(R[-1])
-
-    def finish(self) -> tuple[Evidence, dict[int, int]]:
-        """The evidence of the ticks fed, and the time (as fed) of every tick ``< n`` it
-        names: its first interval's ends, its first trigger, and each listed violation's
-        trigger, interval ends, window ends and violation tick. Later calls return the same;
-        :meth:`feed` then raises.
-
-        Raises:
-            ValueError: no tick was fed (as :func:`evaluate_requirement` for ``n < 1``).
-        """
-        if self._result is not None:
-            return self._result
-        if self.n < 1:
-            raise ValueError("the interval semantics needs at least one tick")
-        if self._in:  # close the open interval at the last tick
-            none = np.zeros(1, np.bool_)
-            self._step(none, none, None, none, np.zeros(1, np.int64), final=True)
-        self._result = self._ledger.evidence(self.n)
-        return self._result
