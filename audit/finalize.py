@@ -34,7 +34,7 @@ from fretc.audit.unknown_ticks import gap_ticks, judge_three
 from fretc.audit.streams import with_streams
 from fretc.common.problems import NAN
 from fretc.monitors.vectorized import supports
-from fretc.monitors.robustness import TINY, margin_ticks
+from fretc.monitors.robustness import TINY
 
 if TYPE_CHECKING:
     from fretc.signals.clock import Sampling
@@ -91,7 +91,7 @@ def finalize(plan: AuditPlan, r: RequirementPlan, res: ClockPass, bindings: Bind
     if n == 0:
         _no_tick(res, v, la, _windows_of(r, bindings))
         return
-    if rob is not None and len(rob.margin) != n:  # (computed over other ticks: not these)
+    if rob is not None and rob.n != n:  # (computed over other ticks: not these)
         rob = None
     known = ltl3[:2] if ltl3 is not None and ltl3[2] == n else None
     _verdict(plan, r, res, bindings, v, nan_unknown, rob, known)
@@ -140,7 +140,8 @@ def _verdict(plan: AuditPlan, r: RequirementPlan, res: ClockPass, bindings: Bind
     try:
         j = judge(r.requirement, f, res.columns, n,
                   monitor_source=r.monitor_source if online else None,
-                  monitor_cls=r.monitor_cls if online else None, rob=rob, ltl3=ltl3)
+                  monitor_cls=r.monitor_cls if online else None, rob=rob, ltl3=ltl3,
+                  times=res.times, points=MARGIN_POINTS)
     except EvidenceUnsupported as exc:
         v.error = f"no online monitor and no interval semantics for it: {exc}"
         return
@@ -433,7 +434,7 @@ def _robustness(r: RequirementPlan, res: ClockPass, bindings: Bindings | None, v
         return
     # the message that decided the tick: the newest held among the clock's topics
     at = _Ticks(res, list(res.log_times.values()), bindings).point(rob.tick)
-    _robustness_fields(v, holds, rob.value, at, _margin_points(rob, res.times))
+    _robustness_fields(v, holds, rob.value, at, rob.points)
 
 
 def _robustness_fields(v, holds: bool, value: float, at: TimePoint,
@@ -454,14 +455,6 @@ def _robustness_fields(v, holds: bool, value: float, at: TimePoint,
     v.robustness = value + 0.0  # never -0.0: its sign is the verdict's
     v.robustness_at = at
     v.margin = points
-
-
-def _margin_points(rob, times: np.ndarray) -> list[tuple[int, int, float]]:
-    """The margin points of the robustness ``rob`` over ticks at ``times``: (tick, time,
-    margin) at the ticks shown (``v.margin``): every tick, or the least of each run of
-    ticks (:func:`fretc.monitors.robustness.margin_ticks`)."""
-    m = rob.margin
-    return [(i, int(times[i]), float(m[i])) for i in margin_ticks(m, MARGIN_POINTS)]
 
 
 def _first_violation(r: RequirementPlan, v, ev, status: str, st_tick: int | None, n: int,

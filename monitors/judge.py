@@ -35,7 +35,8 @@ import numpy as np
 
 from fretc.monitors import stepwise
 from fretc.monitors.interval import Evidence, EvidenceUnsupported, evaluate_requirement
-from fretc.monitors.robustness import Robustness, chunkable, past_truth, robustness, stateful
+from fretc.monitors.robustness import (POINTS, RobustnessSummary, chunkable, past_truth,
+                                       robustness, stateful)
 from fretc.monitors.vectorized import (VectorizeError, atom_letters, node_series, pt_series,
                                        supports)
 from fretc.monitors.nan import nan_ticks_of
@@ -66,8 +67,8 @@ class Judgement:
             generated monitor replayed).
         note: why the interval semantics gave no evidence, or None.
         robustness: the pt formula's robustness over the ticks
-            (:class:`fretc.monitors.robustness.Robustness`), or None where the pt formula
-            cannot be evaluated over columns (a future-time function).
+            (:class:`fretc.monitors.robustness.RobustnessSummary`), or None where the pt
+            formula cannot be evaluated over columns (a future-time function).
     """
 
     holds: bool
@@ -76,14 +77,15 @@ class Judgement:
     ltl3_tick: int | None
     engine: str
     note: str | None = None
-    robustness: Robustness | None = None
+    robustness: RobustnessSummary | None = None
 
 
 def judge(requirement: A.Requirement, formalization: Formalization,
           columns: Mapping[str, np.ndarray], n: int, *,
           monitor_source: MonitorSource | None = None,
-          monitor_cls: type | None = None, rob: Robustness | None = None,
-          ltl3: tuple[str, int | None] | None = None) -> Judgement:
+          monitor_cls: type | None = None, rob: RobustnessSummary | None = None,
+          ltl3: tuple[str, int | None] | None = None, times: np.ndarray | None = None,
+          points: int = POINTS) -> Judgement:
     """Decide one requirement over the first ``n`` ticks of ``columns``.
 
     Args:
@@ -95,9 +97,11 @@ def judge(requirement: A.Requirement, formalization: Formalization,
             automata tables), or None for a requirement without an online monitor.
         monitor_cls: its generated monitor class, for the replay fallbacks, or None.
         rob: the pt formula's robustness over these ticks when computed already (with other
-            traces: :func:`fretc.monitors.robustness.robustness_of_traces`), else None.
+            traces: :func:`fretc.monitors.robustness.robustness_columns`), else None.
         ltl3: the LTL3 verdict and tick of ``monitor_source``'s automata over these ticks
             when computed already (with other traces: :func:`ltl3_verdicts`), else None.
+        times: the ticks' times (int64 ns; None: their indexes), and ``points`` the margin
+            points its robustness keeps (:func:`fretc.monitors.robustness.robustness`).
 
     Raises:
         EvidenceUnsupported: neither the interval semantics, nor the pt formula over the
@@ -123,7 +127,7 @@ def judge(requirement: A.Requirement, formalization: Formalization,
     status, tick = (ltl3 if ltl3 is not None and monitor_source is not None else
                     _ltl3(monitor_source, monitor_cls, columns, n, replayed))
     if rob is None and _pt_evaluable(formalization):
-        rob = robustness(formalization.pt, columns, n)
+        rob = robustness(formalization.pt, columns, n, times=times, points=points)
     return Judgement(holds, ev, status, tick, engine, note, rob)
 
 

@@ -32,10 +32,11 @@ A boolean FRET variable has no distance: ``+-inf`` says "decided by a boolean, n
 A vacuous verdict has a value ``>= 0``: the margin by which the scope or condition stayed
 away (``+inf`` when they are boolean).
 
-:func:`robustness` evaluates a whole trace's columns; :class:`RobustnessStream` the same
-formula over a trace fed a chunk of ticks at a time (memory independent of its length),
-keeping what the audit reports: the value, its tick (:class:`Robustness`) and the margin at
-:func:`margin_ticks`' ticks, the same bits.
+:class:`RobustnessStream` evaluates the formula over a trace fed a chunk of ticks at a time
+(memory independent of its length), keeping what the audit reports: the value, its tick and
+the margin at :func:`margin_ticks`' ticks (:class:`RobustnessSummary`); :func:`robustness` is
+a whole trace fed to it as one chunk. :func:`robustness_columns` evaluates many short traces
+laid end to end at once (entities judged together).
 """
 
 from __future__ import annotations
@@ -53,9 +54,9 @@ from fretc.monitors.vectorized import VectorizeError, node_series
 
 _FUTURE = ("X", "F", "G", "U", "V", "LAST", "future")
 
-__all__ = ["Robustness", "RobustnessStream", "RobustnessSummary", "TINY", "chunkable",
-           "margin_ticks", "past_truth", "robustness", "robustness_of_traces",
-           "robustness_columns", "robustness_series", "stateful"]
+__all__ = ["RobustnessStream", "RobustnessSummary", "TINY", "POINTS", "ROBUSTNESS_CHUNK",
+           "chunkable", "margin_ticks", "past_truth", "robustness", "robustness_columns",
+           "robustness_series", "stateful", "summary_of"]
 
 #: The smallest positive double: ``-TINY`` is the robustness of a comparison false at
 #: distance 0 (the module docstring's sign convention).
@@ -65,85 +66,34 @@ _INF = math.inf
 Columns = Mapping[str, np.ndarray]
 
 
-@dataclass(frozen=True)
-class Robustness:
-    """A requirement's robustness on one trace.
-
-    Attributes:
-        value: the robustness of the pt formula at the last tick (the whole trace), in the
-            unit of the comparison that decides it; ``+-inf`` when a boolean decides it.
-            Negative exactly when FRET's finite-trace verdict is false.
-        tick: the 0-based tick where the margin that decides the verdict was reached (0
-            when ``value`` is NaN). For a pt formula whose top is an unbounded ``H`` (the
-            value is the least margin) the first tick whose margin equals ``value`` (where
-            the trace came closest to violating, or violated most); for any other pt
-            formula (the value is the margin at the last tick) the first tick of the last
-            run of consecutive ticks whose margin equals ``value``: the tick since which
-            the margin has held its final value. Both are a running reading of the margin
-            (:class:`RobustnessStream` keeps them a chunk of ticks at a time).
-        margin: float array ``(n,)``, the margin at every tick: the robustness of the body of
-            a top-level ``H`` (what must hold at every tick), else of the pt formula at that
-            tick.
-    """
-
-    value: float
-    tick: int
-    margin: np.ndarray
-
-
-#: ticks evaluated at a time by :func:`robustness` (a long trace's formula is evaluated a
-#: chunk at a time, carrying each temporal operator's state: the memory is the margin and a
-#: few arrays of a chunk, not a few arrays of the whole trace)
+#: ticks evaluated at a time (a long trace's formula is evaluated a chunk at a time,
+#: carrying each temporal operator's state: the memory is the margin's points and a few
+#: arrays of a chunk, not a few arrays of the whole trace)
 ROBUSTNESS_CHUNK = 1 << 16
+#: the margin points :func:`robustness` keeps by default (the audit keeps its own count)
+POINTS = 400
 
 
-def robustness(pt: Node, columns: Columns, n: int, chunk: int | None = None) -> Robustness:
-    """The robustness of the pt formula ``pt`` over ticks ``0..n-1`` (``n >= 1``), evaluated
-    ``chunk`` ticks (default :data:`ROBUSTNESS_CHUNK`) at a time when ``n`` is longer (the
-    same values: each temporal operator's state carried from chunk to chunk) unless a
-    comparison's operands hold a past-time operator or ``pre`` (then over the whole trace at
-    once). The value and tick are :class:`Robustness`'s (Donze, Maler, FORMATS 2010: the
-    space robustness of the pt formula at the last tick, or of a top ``H``'s body at its
-    least); :class:`RobustnessStream` gives the same a chunk of ticks at a time.
+def robustness(pt: Node, columns: Columns, n: int, chunk: int | None = None, *,
+               times: np.ndarray | None = None, points: int = POINTS) -> RobustnessSummary:
+    """The robustness of the pt formula ``pt`` over a whole trace of ``n >= 1`` ticks: a
+    :class:`RobustnessStream` fed it as one chunk (``chunk`` ticks, default
+    :data:`ROBUSTNESS_CHUNK`, evaluated at a time when ``n`` is longer; a formula whose
+    comparisons read a past-time operator or ``pre``, or whose window is longer than a
+    chunk, over the whole trace at once). ``times``: the ticks' times (int64 ns; default
+    each tick's index); ``points``: the margin points kept.
 
     Raises:
         VectorizeError: a future-time operator or function in ``pt``, or a missing or
             mis-shaped column (as :func:`fretc.monitors.vectorized.pt_series`).
+        ValueError: ``n < 1``.
     """
     if n < 1:
         raise ValueError("robustness needs at least one tick")
     chunk = ROBUSTNESS_CHUNK if chunk is None else chunk
-    top = pt.op == "H" and pt.hi is None  # the margin is that of the body of a top H
-    body = pt.args[0] if top else pt
-    if n > chunk and _chunkable(body, chunk):
-        margin = np.empty(n, dtype=np.float64)
-        carry: dict[Node, object] = {}
-        for a in range(0, n, chunk):
-            b = min(n, a + chunk)
-            margin[a:b] = _Rho(_Window(columns, a, b), b - a, body, a, carry).rho(body)
-    else:
-        margin = _Rho(columns, n, body).rho(body)
-    value, tick = _decisive(margin, top)
-    return Robustness(value, tick, margin)
-
-
-def _decisive(margin: np.ndarray, top: bool) -> tuple[float, int]:
-    """The value and tick of a margin (``(n,)``, ``n >= 1``) as :class:`Robustness` defines
-    them: ``top`` (an unbounded ``H`` on top) the least margin and the first tick at it
-    (the value that tick's bits: of ``0.0`` and ``-0.0`` the first met), else the last
-    tick's margin and the first tick of the last run of ticks at it."""
-    if top:
-        least = margin.min()
-        if least != least:  # (NaN: no tick equals it)
-            return float(least), 0
-        tick = int(np.argmax(margin == least))
-        return float(margin[tick]), tick
-    value = float(margin[-1])
-    if value != value:
-        return value, 0
-    differs = margin[::-1] != value  # (from the last tick back)
-    back = int(np.argmax(differs))
-    return value, (len(margin) - back) if differs[back] else 0
+    stream = RobustnessStream(pt, points, chunk if n > chunk else n, whole=True)
+    stream.feed(columns, n, np.arange(n, dtype=np.int64) if times is None else times)
+    return stream.finish()
 
 
 #: operators :class:`_Rho` evaluates itself (carrying their state from chunk to chunk);
@@ -166,50 +116,17 @@ def _chunkable(body: Node, chunk: int) -> bool:
     return True
 
 
-class _Window(Mapping):
-    """The ticks ``a..b-1`` of every column (views)."""
-
-    def __init__(self, columns: Columns, a: int, b: int) -> None:
-        self.columns, self.a, self.b = columns, a, b
-
-    def __getitem__(self, name: str) -> np.ndarray:
-        return np.asarray(self.columns[name])[self.a:self.b]
-
-    def __iter__(self) -> Iterator[str]:
-        return iter(self.columns)
-
-    def __len__(self) -> int:
-        return len(self.columns)
-
-
-def robustness_of_traces(pt: Node, columns: Columns, firsts: np.ndarray,
-                         lengths: np.ndarray) -> list[Robustness] | None:
-    """The robustness (:func:`robustness`) of each of ``len(firsts)`` traces laid end to end
-    in ``columns`` (trace ``e`` its ``lengths[e] >= 1`` ticks from ``firsts[e]``), in one
-    evaluation of the formula that restarts every temporal operator at each trace's first
-    tick: the values :func:`robustness` gives each trace alone (equal by test). None when
-    that evaluation cannot restart (a comparison's operand holds a past-time operator or
-    ``pre``) or the traces hold more than :data:`ROBUSTNESS_CHUNK` ticks in all: judge them
-    one at a time.
-
-    Raises:
-        VectorizeError: as :func:`robustness`."""
-    got = robustness_columns(pt, columns, firsts, lengths)
-    if got is None:
-        return None
-    margin, values, ticks = got
-    return [Robustness(value, tick, margin[a:a + m].copy())
-            for a, m, value, tick in zip(firsts.tolist(), lengths.tolist(), values.tolist(),
-                                         ticks.tolist())]
-
-
 def robustness_columns(pt: Node, columns: Columns, firsts: np.ndarray, lengths: np.ndarray
                        ) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
-    """:func:`robustness_of_traces` as columns: ``(margin, values, ticks)``, the margin of
-    every tick of the traces laid end to end (float array of ``lengths.sum()``), and per
-    trace its value and tick (0-based in the trace; ``0`` when the value is NaN) as
-    :class:`Robustness` defines them for one trace. None when :func:`robustness_of_traces`
-    gives None.
+    """The robustness of each of ``len(firsts)`` traces laid end to end in ``columns``
+    (trace ``e`` its ``lengths[e] >= 1`` ticks from ``firsts[e]``), in one evaluation of the
+    formula that restarts every temporal operator at each trace's first tick, as columns:
+    ``(margin, values, ticks)``, the margin of every tick of the traces (float array of
+    ``lengths.sum()``), and per trace its value and tick (0-based in the trace; ``0`` when
+    the value is NaN) as :class:`RobustnessSummary` defines them for one trace: what
+    :func:`robustness` gives each trace alone (equal by test). None when that evaluation
+    cannot restart (a comparison's operand holds a past-time operator or ``pre``) or the
+    traces hold more than :data:`ROBUSTNESS_CHUNK` ticks in all: judge them one at a time.
 
     Raises:
         VectorizeError: as :func:`robustness`."""
@@ -221,7 +138,7 @@ def robustness_columns(pt: Node, columns: Columns, firsts: np.ndarray, lengths: 
     margin = _Traces(columns, n, body, np.repeat(firsts, lengths)).rho(body)
     trace = np.repeat(np.arange(len(firsts), dtype=np.int64), lengths)
     local = np.arange(n, dtype=np.int64) - firsts[trace]  # (each tick's, in its trace)
-    if top:  # the least, at its first tick (the value that tick's bits, as _decisive)
+    if top:  # the least, at its first tick (the value that tick's bits, as RobustnessStream reads it)
         values = np.minimum.reduceat(margin, firsts)
         far = np.iinfo(np.int64).max
         ticks = np.minimum.reduceat(np.where(margin == values[trace], local, far), firsts)
@@ -375,20 +292,41 @@ class _MarginRuns:
 
 @dataclass(frozen=True)
 class RobustnessSummary:
-    """What :class:`RobustnessStream` keeps of a requirement's robustness on one trace.
+    """A requirement's robustness on one trace of ``n`` ticks, as :class:`RobustnessStream`
+    keeps it (the *margin* at a tick is the robustness of the body of a top-level unbounded
+    ``H``, what must hold at every tick, else of the pt formula at that tick).
 
     Attributes:
-        value: :attr:`Robustness.value`.
-        tick: :attr:`Robustness.tick` (0-based).
+        value: the robustness of the pt formula at the last tick (the whole trace), in the
+            unit of the comparison that decides it; ``+-inf`` when a boolean decides it.
+            Negative exactly when FRET's finite-trace verdict is false.
+        tick: the 0-based tick where the margin that decides the verdict was reached (0
+            when ``value`` is NaN). For a pt formula whose top is an unbounded ``H`` (the
+            value is the least margin) the first tick whose margin equals ``value`` (where
+            the trace came closest to violating, or violated most); for any other pt
+            formula (the value is the margin at the last tick) the first tick of the last
+            run of consecutive ticks whose margin equals ``value``: the tick since which
+            the margin has held its final value.
         tick_time: the time of that tick (int ns, as the fed ``times``).
         points: the margin at :func:`margin_ticks`' ticks, ``[(tick, time_ns, value)]``
             ascending: ``[(i, times[i], margin[i]) for i in margin_ticks(margin, points)]``.
+        n: the ticks it was judged over.
     """
 
     value: float
     tick: int
     tick_time: int
     points: list[tuple[int, int, float]]
+    n: int = 0
+
+
+def summary_of(margin: np.ndarray, value: float, tick: int, times: np.ndarray, points: int
+               ) -> RobustnessSummary:
+    """The :class:`RobustnessSummary` of a margin computed already (``(n,)`` floats, ``n >=
+    1``; ``value`` and ``tick`` as defined there, ``times`` the ticks' times): the margin
+    of traces laid end to end (:func:`robustness_columns`)."""
+    kept = [(i, int(times[i]), float(margin[i])) for i in margin_ticks(margin, points)]
+    return RobustnessSummary(value, tick, int(times[tick]), kept, len(margin))
 
 
 class _Recorder(Mapping):
@@ -434,19 +372,24 @@ class RobustnessStream:
     A column may change dtype from chunk to chunk (a boolean read as ``bool``, ``uint8``
     0/1 or ``float64`` 0/1: a CSV reader decides a column's type at the end of the file):
     a block holds the common type of its pieces (``np.result_type``), which reads as the
-    same truth (``bool(x)``) and the same number.
+    same truth (``bool(x)``) and the same number. A whole block fed at once is evaluated
+    where it lies (no copy).
     """
 
-    def __init__(self, pt: Node, points: int, chunk: int | None = None) -> None:
+    def __init__(self, pt: Node, points: int, chunk: int | None = None,
+                 whole: bool = False) -> None:
         """Args:
             pt: the requirement's pt formula.
             points: the most margin points kept (``>= 1``, the audit's ``MARGIN_POINTS``).
             chunk: ticks per block (:func:`robustness`'s ``chunk``).
+            whole: a formula that cannot be evaluated a chunk at a time is taken, fed the
+                whole trace as one chunk (evaluated at once: :func:`robustness`).
 
         Raises:
-            VectorizeError: the formula cannot be evaluated a chunk at a time: a
-                future-time operator or function, a comparison, arithmetic or call over a
-                past-time operator or ``pre``, or a bounded window longer than ``chunk``.
+            VectorizeError: a future-time operator or function; without ``whole``, a
+                formula that cannot be evaluated a chunk at a time: a comparison,
+                arithmetic or call over a past-time operator or ``pre``, or a bounded
+                window longer than ``chunk``.
             ValueError: ``points < 1``.
         """
         self.chunk = ROBUSTNESS_CHUNK if chunk is None else chunk
@@ -454,7 +397,9 @@ class RobustnessStream:
         self.body = pt.args[0] if self.top else pt
         if any(x.op in _FUTURE for x in walk(self.body)):
             raise VectorizeError("future-time operator or function in a past-time formula")
-        if not _chunkable(self.body, self.chunk):
+        #: fed the whole trace as one block (a formula not evaluated a chunk at a time)
+        self.at_once = not _chunkable(self.body, self.chunk)
+        if self.at_once and not whole:
             raise VectorizeError("the pt formula compares a past-time value, or has a window "
                                  f"longer than {self.chunk} ticks: not a chunk at a time")
         self.names = _columns_read(self.body)
@@ -478,7 +423,7 @@ class RobustnessStream:
 
         Raises:
             VectorizeError: a column missing or shorter than ``k``.
-            ValueError: fed after :meth:`finish`.
+            ValueError: fed after :meth:`finish`; a second chunk of a formula fed at once.
         """
         if self.done is not None:
             raise ValueError("the robustness stream was finished")
@@ -488,8 +433,20 @@ class RobustnessStream:
         times = np.asarray(times)[:k]
         if len(times) != k:
             raise VectorizeError(f"{len(times)} times for {k} ticks")
+        if self.at_once:
+            if self.start or self.fill:
+                raise ValueError("the pt formula compares a past-time value: its robustness "
+                                 "is fed the whole trace as one chunk")
+            self._evaluate(pieces, k, times)
+            return
         at = 0
         while at < k:
+            if not self.fill and k - at >= self.chunk:  # (a whole block: where it lies)
+                b = at + self.chunk
+                self._evaluate({name: p[at:b] for name, p in pieces.items()}, self.chunk,
+                               times[at:b])
+                at = b
+                continue
             take = min(k - at, self.chunk - self.fill)
             for name, piece in pieces.items():
                 self._put(name, piece[at:at + take])
@@ -497,7 +454,7 @@ class RobustnessStream:
             self.fill += take
             at += take
             if self.fill == self.chunk:
-                self._evaluate()
+                self._evaluate_block()
 
     def finish(self) -> RobustnessSummary:
         """The summary of the ticks fed (the block begun evaluated); the same on every call.
@@ -507,14 +464,14 @@ class RobustnessStream:
         """
         if self.done is None:
             if self.fill:
-                self._evaluate()
+                self._evaluate_block()
             if self.start == 0:
                 raise ValueError("robustness needs at least one tick")
-            if self.value != self.value:  # (NaN: no tick equals it, tick 0 as robustness())
+            if self.value != self.value:  # (NaN: no tick equals it: tick 0)
                 self.tick, self.tick_time = 0, self.first_time
             assert self.tick is not None  # (a value not NaN was met at a tick)
             self.done = RobustnessSummary(self.value, self.tick, self.tick_time,
-                                          self.runs.points_list())
+                                          self.runs.points_list(), self.start)
             self.blocks = {}
         return self.done
 
@@ -530,13 +487,18 @@ class RobustnessStream:
                 block = self.blocks[name] = block.astype(common)
         block[self.fill:self.fill + len(piece)] = piece
 
-    def _evaluate(self) -> None:
-        """The margin of the block (as :func:`robustness` evaluates a chunk), read into the
-        value, tick and margin points; the block emptied."""
-        k, a = self.fill, self.start
-        columns = {name: block[:k] for name, block in self.blocks.items()}
+    def _evaluate_block(self) -> None:
+        """:meth:`_evaluate` of the block filled; the block emptied."""
+        k = self.fill
+        self._evaluate({name: block[:k] for name, block in self.blocks.items()}, k,
+                       self.times[:k])
+        self.fill = 0
+
+    def _evaluate(self, columns: Columns, k: int, times: np.ndarray) -> None:
+        """The margin of the next ``k`` ticks (``columns``, ``times``: theirs), each temporal
+        operator's state carried, read into the value, tick and margin points."""
+        a = self.start
         margin = _Rho(columns, k, self.body, a, self.carry).rho(self.body)
-        times = self.times[:k]
         if a == 0:
             self.first_time = int(times[0])
         if self.top:
@@ -544,7 +506,7 @@ class RobustnessStream:
         else:
             self._last_run(margin, a, times)
         self.runs.add(margin, a, times)
-        self.start, self.fill = a + k, 0
+        self.start = a + k
 
     def _least(self, margin: np.ndarray, a: int, times: np.ndarray) -> None:
         """A top ``H``: the least margin so far at its first tick (NaN: stays NaN)."""

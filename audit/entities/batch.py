@@ -36,7 +36,8 @@ from fretc.monitors.expressions import EvidenceUnsupported
 from fretc.monitors.interval import evaluate_requirement
 from fretc.monitors.interval_traces import interval_counts
 from fretc.monitors.judge import ltl3_verdicts
-from fretc.monitors.robustness import ROBUSTNESS_CHUNK, Robustness, robustness_columns
+from fretc.monitors.robustness import ROBUSTNESS_CHUNK, robustness_columns, summary_of
+from fretc.audit.verdict import MARGIN_POINTS
 from fretc.monitors.vectorized import VectorizeError, pt_series, supports
 
 __all__ = ["batchable", "batch_verdicts", "judge_at_once", "CHUNK_TICKS", "BATCH_NOTE"]
@@ -169,7 +170,8 @@ def _chunk(j: Any, trig: Any, block: EntityBlock, ents: np.ndarray, i0s: np.ndar
         i, a, m = int(ents[e]), int(firsts[e]), int(lengths[e])  # LTL3 verdict, ticks and
         j.ltl3s[i] = (*ltl3[e], m)  # robustness known)
         if robs:
-            j.robs[i] = Robustness(float(values[e]), int(ticks[e]), margin[a:a + m].copy())
+            j.robs[i] = summary_of(margin[a:a + m], float(values[e]), int(ticks[e]),
+                                   j.times[int(i0s[e]):int(i0s[e]) + m], MARGIN_POINTS)
     sel = np.flatnonzero(fast & holds & ~(values < 0))  # (a value that disagrees: alone)
     if not len(sel):
         return sel, sel

@@ -113,16 +113,16 @@ def test_the_chunks_are_exercised(plan, tmp_path):
     path = tmp_path / "plain.csv"
     path.write_text(_trace(random.Random(5), 40, True, 0.0, 0.0, False, nan=False), encoding="utf-8")
     calls = []
-    original = robustness._Window.__init__
+    original = robustness.RobustnessStream._evaluate
 
-    def spy(self, columns, a, b):
-        calls.append((a, b))
-        original(self, columns, a, b)
+    def spy(self, columns, k, times):
+        calls.append((self.start, self.start + k))
+        original(self, columns, k, times)
 
     mp = pytest.MonkeyPatch()
     try:
         mp.setattr(robustness, "ROBUSTNESS_CHUNK", 3)
-        mp.setattr(robustness._Window, "__init__", spy)
+        mp.setattr(robustness.RobustnessStream, "_evaluate", spy)
         la = audit_log(plan, str(path))
     finally:
         mp.undo()

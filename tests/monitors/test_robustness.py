@@ -18,7 +18,7 @@ from hypothesis import strategies as st
 from fretc.compiler import evaluate, ir
 from fretc.fretish import ast as A
 from fretc.monitors.judge import judge
-from fretc.monitors.robustness import (TINY, robustness, robustness_of_traces,
+from fretc.monitors.robustness import (TINY, robustness, robustness_columns,
                                        robustness_series)
 from fretc.monitors.vectorized import pt_series
 
@@ -143,7 +143,7 @@ def _check(comp, cols, n):
     rob = robustness(f.pt, cols, n)
     ref = BruteForce(cols, n).rho(f.pt, n - 1)
     assert rob.value == ref, comp.text
-    _check_tick(f.pt, rob)
+    _check_tick(f.pt, rob, cols, n)
     # the sign is the verdict: of the judge (interval semantics), and of pt at every tick
     j = judge(comp.requirement, f, cols, n)
     assert (rob.value >= 0) == j.holds, comp.text
@@ -152,10 +152,16 @@ def _check(comp, cols, n):
     assert signs == pt_series(f.pt, cols, n).tolist(), comp.text
 
 
-def _check_tick(pt, rob):
-    """:attr:`Robustness.tick` by its definition: the first tick at the least margin for a
-    top ``H``, else the first tick of the last run of ticks at the last tick's margin."""
-    m, t = rob.margin, rob.tick
+def _margin(pt, cols, n):
+    """The margin at every tick: the robustness of a top ``H``'s body, else of ``pt``."""
+    return robustness_series(pt.args[0] if pt.op == "H" and pt.hi is None else pt, cols, n)
+
+
+def _check_tick(pt, rob, cols, n):
+    """:attr:`RobustnessSummary.tick` by its definition: the first tick at the least margin
+    for a top ``H``, else the first tick of the last run of ticks at the last tick's
+    margin."""
+    m, t = _margin(pt, cols, n), rob.tick
     assert m[t] == rob.value
     if pt.op == "H" and pt.hi is None:
         assert rob.value == m.min() and not (m[:t] == rob.value).any()
@@ -188,10 +194,13 @@ def test_chunks_give_the_margin_of_the_whole_trace(all_keys, index, n, chunk, rn
     bit for bit, wherever the chunks' edges fall."""
     pt = all_keys[index].formalization.pt
     cols = _trace(rnd, n)
-    whole = robustness(pt, cols, n, chunk=n)
-    parts = robustness(pt, cols, n, chunk=chunk)
+    whole = robustness(pt, cols, n, chunk=n, points=n)
+    parts = robustness(pt, cols, n, chunk=chunk, points=n)
     assert (parts.value, parts.tick) == (whole.value, whole.tick), all_keys[index].text
-    assert parts.margin.tobytes() == whole.margin.tobytes(), all_keys[index].text
+    for got in (parts, whole):  # (every tick: n points)
+        assert [t for t, _tt, _v in got.points] == list(range(n)), all_keys[index].text
+        margin = np.array([v for _t, _tt, v in got.points])
+        assert margin.tobytes() == _margin(pt, cols, n).tobytes(), all_keys[index].text
 
 
 @settings(max_examples=60, deadline=None)
@@ -206,13 +215,14 @@ def test_traces_end_to_end_give_each_traces_own_robustness(all_keys, index, leng
     cols = {k: np.concatenate([t[k] for t in traces]) for k in traces[0]}
     counts = np.array(lengths, dtype=np.int64)
     firsts = np.cumsum(counts) - counts
-    got = robustness_of_traces(pt, cols, firsts, counts)
+    got = robustness_columns(pt, cols, firsts, counts)
     assert got is not None, all_keys[index].text  # (no template compares a past-time operand)
-    for t, m, r in zip(traces, lengths, got):
+    margin, values, ticks = got
+    for t, a, m, value, tick in zip(traces, firsts, lengths, values, ticks):
         alone = robustness(pt, t, m)
-        assert (r.value, r.tick) == (alone.value, alone.tick) or (
-            math.isnan(r.value) and math.isnan(alone.value)), all_keys[index].text
-        assert r.margin.tobytes() == alone.margin.tobytes(), all_keys[index].text
+        assert (value, tick) == (alone.value, alone.tick) or (
+            math.isnan(value) and math.isnan(alone.value)), all_keys[index].text
+        assert margin[a:a + m].tobytes() == _margin(pt, t, m).tobytes(), all_keys[index].text
 
 
 _ATOMS = st.sampled_from(["m", "c", "r", "s"]).map(ir.ap)
@@ -236,12 +246,14 @@ def test_any_past_formula_end_to_end_gives_each_traces_own_robustness(pt, length
     traces = [_trace(rnd, m) for m in lengths]
     cols = {k: np.concatenate([t[k] for t in traces]) for k in traces[0]}
     counts = np.array(lengths, dtype=np.int64)
-    got = robustness_of_traces(pt, cols, np.cumsum(counts) - counts, counts)
+    firsts = np.cumsum(counts) - counts
+    got = robustness_columns(pt, cols, firsts, counts)
     assert got is not None
-    for t, m, r in zip(traces, lengths, got):
+    margin, values, ticks = got
+    for t, a, m, value, tick in zip(traces, firsts, lengths, values, ticks):
         alone = robustness(pt, t, m)
-        assert (r.value, r.tick) == (alone.value, alone.tick), pt
-        assert r.margin.tobytes() == alone.margin.tobytes(), pt
+        assert (value, tick) == (alone.value, alone.tick), pt
+        assert margin[a:a + m].tobytes() == _margin(pt, t, m).tobytes(), pt
 
 
 @pytest.mark.tor("TOR-VER-007")
@@ -276,7 +288,7 @@ def test_the_tick_of_a_last_value_is_where_its_last_run_began():
     c = compile_entry(entry("R", "in m mode the sw shall eventually satisfy x > 1"))
     cols = {"x": np.array([1.5, 0.0, 0.5, 1.5]), "m": np.array([True, False, True, True])}
     r = robustness(c.formalization.pt, cols, 4)
-    assert r.margin.tolist() == [0.5, 0.5, -0.5, 0.5]
+    assert [v for _t, _tt, v in r.points] == [0.5, 0.5, -0.5, 0.5]
     assert (r.value, r.tick) == (0.5, 3)
 
 

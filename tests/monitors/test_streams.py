@@ -1,9 +1,10 @@
-"""monitors.robustness.RobustnessStream and monitors.judge.Ltl3Stream: a trace fed a chunk of
-ticks at a time (any chunks: empty ones, single ticks, edges anywhere across the blocks of
-ROBUSTNESS_CHUNK ticks, a boolean column's dtype changing from chunk to chunk) gives the
-robustness value, tick and margin points and the LTL3 verdict and tick of the whole-trace
-functions, the same bits; margin_ticks equals a brute-force reading of its definition; the
-stream's memory does not grow with the trace."""
+"""monitors.robustness.RobustnessStream and monitors.judge.Ltl3Stream at every chunk boundary:
+a trace fed a chunk of ticks at a time (any chunks: empty ones, single ticks, edges anywhere
+across the blocks of ROBUSTNESS_CHUNK ticks, a boolean column's dtype changing from chunk to
+chunk) gives the robustness value, tick and margin points and the LTL3 verdict and tick of
+the whole trace fed as one chunk, the same bits, and the margin points are those of the
+margin evaluated over the whole trace at once (robustness_series); margin_ticks equals a
+brute-force reading of its definition; the stream's memory does not grow with the trace."""
 
 from __future__ import annotations
 
@@ -25,7 +26,7 @@ from fretc.compiler.pt_step import CodegenError
 from fretc.monitors import robustness as rob_module
 from fretc.monitors.judge import Ltl3Stream, ltl3_verdict
 from fretc.monitors.robustness import (RobustnessStream, _MarginRuns, chunkable, margin_ticks,
-                                       past_truth, robustness)
+                                       past_truth, robustness, robustness_series)
 from fretc.monitors.vectorized import VectorizeError, node_series, supports
 
 from _monitor_helpers import KEYS, compiled, entry, requirement
@@ -90,12 +91,18 @@ def _expected_points(margin, times, points):
     return [(i, int(times[i]), float(margin[i])) for i in margin_ticks(margin, points)]
 
 
-def _assert_same_robustness(got, want, times, points, what):
+def _assert_same_robustness(got, pt, cols, n, times, points, what, chunk=None):
+    """``got`` (fed in chunks) against the whole trace fed as one chunk (blocks of
+    ``chunk`` ticks), and its points against the margin over the whole trace at once."""
+    want = robustness(pt, cols, n, chunk, times=times, points=points)
     assert _bits(got.value) == _bits(want.value), what
     assert (got.tick, got.tick_time) == (want.tick, int(times[want.tick])), what
-    expected = _expected_points(want.margin, times, points)
-    assert [(t, tt, _bits(v)) for t, tt, v in got.points] == \
-        [(t, tt, _bits(v)) for t, tt, v in expected], what
+    assert got.n == want.n == n, what
+    body = pt.args[0] if pt.op == "H" and pt.hi is None else pt
+    expected = _expected_points(robustness_series(body, cols, n), times, points)
+    for kept in (got.points, want.points):
+        assert [(t, tt, _bits(v)) for t, tt, v in kept] == \
+            [(t, tt, _bits(v)) for t, tt, v in expected], what
 
 
 # ---------------------------------------------------------------- margin_ticks
@@ -180,8 +187,8 @@ def test_robustness_stream_equals_robustness(all_keys, index, n, chunk, points, 
     except VectorizeError:  # (a window longer than a block: the whole trace at once)
         assert not rob_module._chunkable(pt, chunk), index
         return
-    _assert_same_robustness(got, robustness(pt, cols, n, chunk=chunk), times, points, index)
-    _assert_same_robustness(got, robustness(pt, cols, n, chunk=n), times, points, index)
+    _assert_same_robustness(got, pt, cols, n, times, points, index, chunk)
+    _assert_same_robustness(got, pt, cols, n, times, points, index, n)
 
 
 def test_robustness_stream_with_a_small_robustness_chunk(all_keys, monkeypatch):
@@ -196,7 +203,7 @@ def test_robustness_stream_with_a_small_robustness_chunk(all_keys, monkeypatch):
         assert stream.chunk == 8
         for part, k, t in _chunks(rnd, n, cols, times):
             stream.feed(part, k, t)
-        _assert_same_robustness(stream.finish(), robustness(pt, cols, n), times, 7, pt)
+        _assert_same_robustness(stream.finish(), pt, cols, n, times, 7, pt)
 
 
 def _random_compiled(seed: int):
@@ -238,7 +245,7 @@ def test_robustness_stream_of_random_requirements(seed, n, chunk, points, rnd):
     except VectorizeError:
         assert not supports(pt) or not rob_module._chunkable(body, chunk), text
         return
-    _assert_same_robustness(got, robustness(pt, cols, n, chunk=chunk), times, points, text)
+    _assert_same_robustness(got, pt, cols, n, times, points, text, chunk)
 
 
 def test_robustness_stream_refusals_and_errors():
@@ -253,6 +260,12 @@ def test_robustness_stream_refusals_and_errors():
     assert not chunkable(compared)
     with pytest.raises(VectorizeError):
         RobustnessStream(ir.H(compared), 10)
+    at_once = RobustnessStream(ir.H(compared), 10, whole=True)  # (the whole trace, one chunk)
+    at_once.feed({"x": np.array([0.0, 2.0, 3.0])}, 3, np.arange(3))
+    with pytest.raises(ValueError, match="one chunk"):
+        at_once.feed({"x": np.array([0.0])}, 1, np.arange(1))
+    assert at_once.finish() == robustness(ir.H(compared), {"x": np.array([0.0, 2.0, 3.0])}, 3,
+                                          points=10)
     stream = RobustnessStream(window.formalization.pt, 10)
     with pytest.raises(VectorizeError, match="'q'"):
         stream.feed({"p": np.ones(3, np.bool_)}, 3, np.arange(3))
