@@ -152,10 +152,10 @@ def _ltl3(monitor_source, monitor_cls, columns, n: int, replayed) -> tuple[str, 
 
 def ltl3_verdict(monitor_source: MonitorSource, columns: Mapping[str, np.ndarray], n: int
                  ) -> tuple[str, int | None]:
-    """The earliest definitive LTL3 verdict of a monitor over ``n`` ticks, replaying the
-    deterministic Spot monitors embedded by :func:`fretc.compiler.codegen.monitor_source`
-    (``bad`` for ft_inf: rejection means *violated*; ``good`` for its negation: rejection
-    means *satisfied*).
+    """The earliest definitive LTL3 verdict of a monitor over a whole trace of ``n`` ticks:
+    an :class:`Ltl3Stream` fed it as one chunk (the deterministic Spot monitors embedded by
+    :func:`fretc.compiler.codegen.monitor_source`, ``bad`` for ft_inf: rejection means
+    *violated*; ``good`` for its negation: rejection means *satisfied*).
 
     Returns:
         ``(verdict, tick)``: verdict ``"satisfied"``, ``"violated"`` or ``"unknown"``; tick
@@ -164,30 +164,13 @@ def ltl3_verdict(monitor_source: MonitorSource, columns: Mapping[str, np.ndarray
 
     Raises:
         VectorizeError: an automaton given as condition chains (more than
-            ``codegen.TABLE_MAX_APS`` atoms): use the step-wise monitor.
+            ``codegen.TABLE_MAX_APS`` atoms): use the step-wise monitor; an atom that cannot
+            be evaluated over columns.
     """
-    ms = monitor_source
-    bad, good = ms.bad, ms.good
-    if bad is not None and bad.empty:
-        return "violated", None
-    if good is not None and good.empty:
-        return "satisfied", None
-    live = [(aut, outcome) for aut, outcome in ((bad, "violated"), (good, "satisfied"))
-            if aut is not None and not aut.complete]
-    if not live:
-        return "unknown", None
-    for aut, _ in live:
-        if aut.table is None:
-            raise VectorizeError("automaton with condition chains (too many atoms to "
-                                 "tabulate): use the step-wise monitor")
-    best: tuple[str, int | None] = ("unknown", None)
-    for aut, outcome in live:  # the first rejection of each automaton
-        assert aut.table is not None  # (checked above)
-        hit = _first_rejection(aut.table, aut.initial,
-                               atom_letters(aut.atoms, columns, n))
-        if hit is not None and (best[1] is None or hit < best[1]):
-            best = (outcome, hit)
-    return best
+    stream = Ltl3Stream(monitor_source, whole=True)
+    stream.feed(columns, n, np.arange(n, dtype=np.int64))
+    status, tick, _time = stream.finish()
+    return status, tick
 
 
 #: letters read into Python at a time by :func:`_advance`
@@ -256,15 +239,19 @@ class Ltl3Stream:
     whose value depends on earlier ticks (a past-time function, ``FTP``) is evaluated with
     its temporal operators' state carried (:func:`fretc.monitors.robustness.past_truth`).
     Memory: the letters and atoms of one chunk, and per atom its operators' state (a
-    bounded window's last ticks): independent of the trace's length.
+    bounded window's last ticks): independent of the trace's length. :func:`ltl3_verdict`
+    is a whole trace fed as one chunk.
     """
 
-    def __init__(self, monitor_source: MonitorSource) -> None:
-        """Raises:
-            VectorizeError: as :func:`ltl3_verdict` (an automaton with condition chains,
-                too many atoms to tabulate: use the step-wise monitor), or a live
-                automaton's atom that cannot be evaluated a chunk at a time (a future-time
-                operator, a comparison over a past-time operator or ``pre``)."""
+    def __init__(self, monitor_source: MonitorSource, whole: bool = False) -> None:
+        """``whole``: an atom that cannot be evaluated a chunk at a time (a comparison over a
+        past-time operator or ``pre``) is taken, the stream fed the whole trace as one chunk.
+
+        Raises:
+            VectorizeError: an automaton with condition chains (too many atoms to tabulate:
+                use the step-wise monitor), or a live automaton's atom that cannot be
+                evaluated over columns (a future-time operator) or, without ``whole``, a
+                chunk at a time."""
         ms = monitor_source
         bad, good = ms.bad, ms.good
         self.decided: str | None = None  # definite before any tick
@@ -283,13 +270,19 @@ class Ltl3Stream:
             self.live.append(_Running(aut.table, aut.initial, tuple(aut.atoms), outcome))
         #: each atom depending on earlier ticks -> its temporal operators' state
         self.carry: dict[Node, dict] = {}
+        #: an atom evaluated over the whole trace, fed as one chunk
+        self.at_once = False
         for run in self.live:
             for atom in run.atoms:
-                if not supports(atom) or (stateful(atom) and not chunkable(atom)):
-                    raise VectorizeError(f"atom {atom} cannot be evaluated a chunk at a time "
-                                         "(a future-time operator, or a comparison over a "
-                                         "past-time value)")
-                if stateful(atom):
+                if not supports(atom):
+                    raise VectorizeError(f"atom {atom} cannot be evaluated over columns (a "
+                                         "future-time operator)")
+                if stateful(atom) and not chunkable(atom):
+                    if not whole:
+                        raise VectorizeError(f"atom {atom} cannot be evaluated a chunk at a "
+                                             "time (a comparison over a past-time value)")
+                    self.at_once = True
+                elif stateful(atom):
                     self.carry[atom] = {}
         self.start = 0  # ticks fed
 
@@ -299,7 +292,11 @@ class Ltl3Stream:
         their times (int64 ns, at least ``k``).
 
         Raises:
-            VectorizeError: a column missing or shorter than ``k``."""
+            VectorizeError: a column missing or shorter than ``k``.
+            ValueError: a second chunk of a stream with an atom evaluated at once."""
+        if self.at_once and self.start and k > 0:
+            raise ValueError("an atom compares a past-time value: the LTL3 automata are fed "
+                             "the whole trace as one chunk")
         running = [run for run in self.live if run.hit is None]
         if k > 0 and running:
             window = {name: np.asarray(col)[:k] for name, col in columns.items()}

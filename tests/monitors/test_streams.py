@@ -366,6 +366,20 @@ def test_ltl3_stream_of_random_requirements(seed, n, rnd):
     assert time == (None if tick is None else int(times[tick])), text
 
 
+def test_ltl3_stream_takes_an_atom_over_pre_in_one_chunk():
+    """An atom comparing a past-time value is evaluated over the whole trace fed as one
+    chunk (``whole``), and refused in chunks."""
+    comp = compile_entry(entry("R", "the sw shall always satisfy preReal(0, x) <= x + 1"))
+    ms = monitor_source(comp, 0)
+    with pytest.raises(VectorizeError):
+        Ltl3Stream(ms)
+    stream = Ltl3Stream(ms, whole=True)
+    stream.feed({"x": np.array([0.0, 2.0, 0.5])}, 3, np.arange(3))
+    with pytest.raises(ValueError, match="one chunk"):
+        stream.feed({"x": np.array([0.0])}, 1, np.arange(1))
+    assert stream.finish()[:2] == ("violated", 2)
+
+
 def test_ltl3_stream_carries_past_atoms_and_refuses_chains():
     """An atom holding a past-time function is evaluated with its state carried (a 3-tick
     window across 1-tick chunks); an automaton without a table is refused as ltl3_verdict
