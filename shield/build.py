@@ -388,6 +388,24 @@ def _atom(node: Node, bounds: dict[Node, Any] | None = None) -> Atom:
     return Atom(to_smv(node), var, op, float(c), letter_name(node))
 
 
+def _cluster_numbers(comp: Component, letter: dict[str, bool]) -> dict[str, float]:
+    """Numbers of the inputs compared together (an input cluster, the order comparisons of
+    bounds among them) that give their atoms the truths of ``letter`` (a game letter: atom
+    name -> value), from z3's witness of that valuation; none for a cluster the letter does
+    not value whole."""
+    out: dict[str, float] = {}
+    for cl in comp.clusters:
+        if not cl.is_input:
+            continue
+        names = [letter_name(comp.names.get(a, a)) for a in cl.atoms]
+        if not all(n in letter for n in names):
+            continue
+        got = cl.witnesses.get(tuple(bool(letter[n]) for n in names))
+        if isinstance(got, dict):
+            out.update({v: x for v, x in got.items() if v not in out})
+    return out
+
+
 def _unrealizable(comp: Component, p: Plan, ans: dict[str, Any]) -> str:
     """The refusal of an unrealizable component, with the inputs that defeat every
     controller when the search found them."""
@@ -428,9 +446,12 @@ def _unrealizable(comp: Component, p: Plan, ans: dict[str, Any]) -> str:
     for letter in ans["inputs"]:
         truth = {atoms[k]: v for k, v in letter.items() if k in atoms}
         numbers = numeric.values(truth)
-        row = {}
+        row: dict[str, Any] = {}
+        clustered = _cluster_numbers(comp, letter)
         for v in p.inputs:
-            if v in numeric.atoms:
+            if v in clustered:  # (compared with other inputs: the cluster's numbers)
+                row[v] = clustered[v]
+            elif v in numeric.atoms:
                 row[v] = numbers[v]
             elif mangle(v) in letter:  # (a letter names a variable as Spot's words do)
                 row[v] = letter[mangle(v)]

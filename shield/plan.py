@@ -29,7 +29,8 @@ atoms of the controller, and which of their truth values numbers give at a tick 
 environment's move: the order comparisons of their ends (inputs only) join the game's inputs,
 related to the other comparisons of the inputs by z3, and the controller's consistency says
 which truth values each order allows. Such an output may not be compared with ``=``/``!=``,
-with another output, or take whole numbers (refused, with the reason).
+with another output, share its message's field with another output, or take whole numbers
+(refused, with the reason).
 
 Components (as ``fretc check``'s realizability: requirements sharing a variable) are joined
 further when the bindings bind their outputs to one topic, and when the binding file names
@@ -219,6 +220,7 @@ def plan(compiled: Sequence[Any], inputs: Sequence[str], outputs: Sequence[str],
     whole = sorted(set(integers) & set(outputs))
     ids = {a.id for a in assumed}
     turns = [list(t) for t in twists]
+    _refuse_shared_fields(turns, outputs, bindings)
     components = []
     for items in _components(enforced + assumed, groups + turns):
         reqs = [x for x in items if x.id not in ids]
@@ -231,6 +233,57 @@ def plan(compiled: Sequence[Any], inputs: Sequence[str], outputs: Sequence[str],
         components.append(comp)
     _twists_read(turns, components, notes)
     return Plan(inputs, outputs, components, monitored, notes, whole)
+
+
+def _fields(e: Expr) -> set[tuple[str, tuple[str, ...]]]:
+    """The message fields a binding reads (topic, path of attribute names)."""
+    out: set[tuple[str, tuple[str, ...]]] = set()
+    stack = [e]
+    while stack:
+        x = stack.pop()
+        if isinstance(x, Field):
+            out.add((x.topic, tuple(str(p) for p in x.path)))
+        stack.extend(c for c in vars(x).values() if isinstance(c, Expr))
+        stack.extend(c for v in vars(x).values() if isinstance(v, (list, tuple))
+                     for c in v if isinstance(c, Expr))
+    return out
+
+
+def _at(bindings: Bindings, v: str) -> str:
+    """``file:line`` of the binding of ``v``."""
+    b = bindings.variables[v]
+    return f"{b.source}:{b.line}" if b.line is not None else str(b.source)
+
+
+def _refuse_shared_fields(twists: list[list[str]], outputs: list[str],
+                          bindings: Bindings | None) -> None:
+    """Refuse a twist whose output's field another output outside the twist reads
+    (``angular_speed = abs(angular.z)`` or ``stopped`` beside ``angular_velocity =
+    angular.z``): scaling the twist would change that output too, which the shield decides by
+    its own comparisons (so the forms scale a twist's fields and nothing else).
+
+    Raises:
+        ShieldError: naming the twist's output, the other output and the field."""
+    if bindings is None:
+        return
+    for t in twists:
+        for v in t:
+            if v not in bindings.variables:
+                continue
+            mine = _fields(bindings.variables[v].ast)
+            for u in outputs:
+                if u in t or u not in bindings.variables:
+                    continue
+                shared = mine & _fields(bindings.variables[u].ast)
+                if shared:
+                    topic, path = sorted(shared)[0]
+                    raise ShieldError(
+                        f"[shield] twists: {v} reads {topic}.{'.'.join(path)}, which the "
+                        f"output {u} reads too ({_at(bindings, u)}): scaling the twist "
+                        f"would change {u}, which the shield decides by its own comparisons; "
+                        "a twist's outputs must be the only outputs of their fields (write "
+                        f"{u}'s comparisons over {v}: -0.5 <= {v} & {v} <= 0.5 for "
+                        "abs(...) <= 0.5)")
 
 
 def _twists_read(twists: list[list[str]], components: list[Component], notes: list[str]
@@ -458,7 +511,8 @@ def _component(items: list[CheckItem], inputs: list[str], groups: list[list[str]
     bounded = list(dict.fromkeys(b.output for b in bounds.values()))
     plain = [_without_bounds(f, bounds) for f in pts + apts]
     constants = NumericAbstraction.of(pts + apts).atoms
-    _refuse_bounded(items, bounded, constants, integers)
+    _refuse_bounded(items, bounded, constants, integers, inputs)
+    _refuse_shared_bounds(items, bounded, groups, bindings, inputs)
     orders, feasible = feasibility(list(bounds.values()),
                                    [a for v in bounded for a in constants.get(v, [])])
     ordered = ir.and_all(*orders)
@@ -469,7 +523,7 @@ def _component(items: list[CheckItem], inputs: list[str], groups: list[list[str]
     ctl_inv = numeric.regions([v for v in numeric.atoms if v not in inputs], doubles=True,
                               integers=integers)
     clusters = preds.clusters(plain + [ordered], inputs)
-    _refuse_clustered(items, bounded, clusters)
+    _refuse_clustered(items, bounded, clusters, inputs=inputs)
     _refuse_clustered(items, [v for t in twists for v in t], clusters, "in a twist")
     for cl in clusters:
         for values, why in cl.unwitnessed.items():
@@ -534,14 +588,21 @@ def _without_bounds(f: Node, bounds: dict[Node, Bound]) -> Node:
     return preds.substitute(f, {a: ir.ap(f"__bound_{k}") for k, a in enumerate(bounds)})
 
 
-def _reader(items: list[CheckItem], v: str) -> str:
-    """``ID (file:line)`` of the first of ``items`` reading ``v``."""
-    x = next((x for x in items if v in x.variables), items[0])
+def _reader(items: list[CheckItem], v: str, inputs: Sequence[str] = ()) -> str:
+    """``ID (file:line)`` of the first of ``items`` bounding ``v`` by the ``inputs``, else
+    the first reading it."""
+    def bounds_v(x: CheckItem) -> bool:
+        return x.pt is not None and any(b.output == v
+                                        for b in bounds_of([x.pt], inputs).values())
+
+    x = next((x for x in items if bounds_v(x)), None) or next(
+        (x for x in items if v in x.variables), items[0])
     return f"{x.id} ({x.location})"
 
 
 def _refuse_bounded(items: list[CheckItem], bounded: list[str],
-                    constants: dict[str, list[Node]], integers: Sequence[str]) -> None:
+                    constants: dict[str, list[Node]], integers: Sequence[str],
+                    inputs: Sequence[str] = ()) -> None:
     """Refuse a bounded output (module docstring) compared with a constant by ``=`` or
     ``!=`` (its truth values are no half-lines) or taking whole numbers.
 
@@ -549,21 +610,50 @@ def _refuse_bounded(items: list[CheckItem], bounded: list[str],
         ShieldError: naming the requirement, the output and why."""
     for v in bounded:
         if v in integers:
-            raise ShieldError(f"{_reader(items, v)}: {v} takes whole numbers (FRET's export) "
-                              "and is bounded by the inputs: the shield gives a bounded output "
-                              "the real number nearest the proposal; declare it a real")
+            raise ShieldError(f"{_reader(items, v, inputs)}: {v} takes whole numbers (FRET's "
+                              "export) and is bounded by the inputs: the shield gives a "
+                              "bounded output the real number nearest the proposal; declare "
+                              "it a real")
         for a in constants.get(v, []):
             sc = simple_comparison(a)
             if sc is not None and sc[1] in ("=", "!="):
                 raise ShieldError(
-                    f"{_reader(items, v)}: {v} is bounded by the inputs and compared by "
-                    f"{to_smv(a)}: the truth values of = and != are no half-lines, which the "
+                    f"{_reader(items, v, inputs)}: {v} is bounded by the inputs and compared "
+                    f"by {to_smv(a)}: the truth values of = and != are no half-lines, which the "
                     "shield's bounds need; write the equality as two comparisons (<= and >=)")
 
 
+def _refuse_shared_bounds(items: list[CheckItem], bounded: list[str],
+                          groups: list[list[str]], bindings: Bindings | None,
+                          inputs: Sequence[str] = ()) -> None:
+    """Refuse a bounded output whose message field another output reads too
+    (``linear_speed = abs(linear.x)`` or ``stopped`` beside ``linear_velocity =
+    linear.x``): which truth values numbers give a bound is the output's alone to the game,
+    and the other output's comparisons of the same number would be chosen apart from it.
+
+    Raises:
+        ShieldError: naming the requirement, both outputs and the field."""
+    if bindings is None:
+        return
+    for v in bounded:
+        if v not in bindings.variables:
+            continue
+        mine = _fields(bindings.variables[v].ast)
+        for u in (u for g in groups if v in g for u in g if u != v):
+            shared = mine & _fields(bindings.variables[u].ast)
+            if shared:
+                topic, path = sorted(shared)[0]
+                raise ShieldError(
+                    f"{_reader(items, v, inputs)}: {v} is bounded by the inputs and reads "
+                    f"{topic}.{'.'.join(path)}, which the output {u} reads too "
+                    f"({_at(bindings, u)}): the shield decides a bound on {v}'s number "
+                    f"alone, and {u}'s comparisons of the same number apart from it; bind "
+                    f"no other output to {v}'s fields (write {u}'s comparisons over {v})")
+
+
 def _refuse_clustered(items: list[CheckItem], bounded: list[str],
-                      clusters: list[preds.Cluster], what: str = "bounded by the inputs"
-                      ) -> None:
+                      clusters: list[preds.Cluster], what: str = "bounded by the inputs",
+                      inputs: Sequence[str] = ()) -> None:
     """Refuse an output ``bounded`` (bounded by the inputs, or ``what`` else: of a twist)
     also compared with another output (a cluster's numbers and the bounds, or the twist's
     scaling, would both set it).
@@ -574,8 +664,8 @@ def _refuse_clustered(items: list[CheckItem], bounded: list[str],
         both = [v for v in bounded if v in cl.variables and not cl.is_input]
         if both:
             raise ShieldError(
-                f"{_reader(items, both[0])}: {both[0]} is {what} and compared with other "
-                f"outputs ({', '.join(to_smv(a) for a in cl.atoms)}): the shield sets a "
+                f"{_reader(items, both[0], inputs)}: {both[0]} is {what} and compared with "
+                f"other outputs ({', '.join(to_smv(a) for a in cl.atoms)}): the shield sets a "
                 "cluster's numbers together, from its own table; not supported")
 
 

@@ -11,14 +11,16 @@ comparison's own *threshold*, the last finite double that makes it true going up
 going down), found from the bound's value by galloping then bisection over the doubles in
 their order (:func:`threshold`): the comparison reads the output once with a constant factor,
 so its truth is monotone in it, and the threshold is exact whatever the rounding of ``1.5 *
-v``. The C form computes the same thresholds (unique: the same numbers).
+v``; an infinite bound is read as the reals read it (no finite number is below ``-inf``, even
+where ``1.5 * v`` overflows). The C form computes the same thresholds (unique: the same
+numbers).
 
 Where no finite number gives the decided comparisons (a bound of ``-inf``, REP 117's "too
 close to measure", or NaN; two bounds a double apart), or an input a bound reads cannot be
 read (a NaN: the machines decide for every value it could have had, :mod:`fretc.shield.runtime`,
 and its bounds cannot be computed), the output takes the number nearest the fallback's value
-(rest, 0, without a fallback) that gives its other decided comparisons, and the decision's
-``fault`` says so. The proof (``--prove``) assumes the decided comparisons are given; such a
+(rest, 0, without a fallback) that gives its decided comparisons that can be met (the bounds
+read, else the comparisons with constants alone), and the decision's ``fault`` says so. The proof (``--prove``) assumes the decided comparisons are given; such a
 tick is one where no number gives them, reported, never silent.
 
 **A twist** (``[shield] twists``: a linear and an angular speed) corrected by the machine is
@@ -101,7 +103,14 @@ def threshold(f: Callable[[float], bool], down: bool, estimate: float) -> float:
     monotone in it) holds, searched from ``estimate`` (its bound's value; NaN reads 0):
     ``down``, its true values a half-line downwards, the last such double (``-inf`` when none
     is, the largest finite double when all are); else the first (``+inf`` when none is, the
-    smallest finite double when all are)."""
+    smallest finite double when all are). An infinite bound is read as the reals read it,
+    whatever the rounding: ``v <= +inf`` holds at every finite double, ``v <= -inf`` at none
+    (``1.5 * v`` overflows to ``-inf`` for ``v`` below -1.2e308, where ``1.5 * v <= -inf``
+    holds in doubles: no speed a robot is given)."""
+    if estimate == math.inf:
+        return DOUBLE_MAX if down else math.inf
+    if estimate == -math.inf:
+        return -math.inf if down else -DOUBLE_MAX
     e = estimate if estimate == estimate else 0.0
     e = min(max(e, -DOUBLE_MAX), DOUBLE_MAX)
     if down:
@@ -131,49 +140,51 @@ def bounded_value(specs: list[tuple[str, str | None, Any]], truths: list[int],
     comparison with a constant, or ``(variable, "pred", term)``), ``truths`` their decided
     values, ``metas`` per atom None (a constant's) or a bound's ``(down, estimate term)``,
     ``x`` the proposal (NaN: none), ``inputs`` the tick's readable inputs, ``fallback`` the
-    number to be near when no number gives the comparisons. Returns ``(value, "")``, or the
-    value and why it is the fallback's (the decision's fault, ``VARIABLE: why``)."""
+    number to be near when no number gives the comparisons: then the number nearest it that
+    gives the decided comparisons that can be met (those whose bounds are read, else those
+    with constants alone). Returns ``(value, "")``, or the value and why it is the
+    fallback's nearest (the decision's fault, ``VARIABLE: why``)."""
     lo, hi = -DOUBLE_MAX, DOUBLE_MAX
-    unread: list[str] = []
-    for (var, op, c), t, meta in zip(specs, truths, metas):
+    unread = False
+    for (_v, op, c), t, meta in zip(specs, truths, metas):
         if meta is None:
-            o = op if t else _NOT[str(op)]
-            if o == "<=":
-                hi = min(hi, c)
-            elif o == "<":
-                hi = min(hi, math.nextafter(c, -math.inf))
-            elif o == ">=":
-                lo = max(lo, c)
-            elif o == ">":
-                lo = max(lo, math.nextafter(c, math.inf))
+            lo, hi = _narrow(str(op), float(c), t, lo, hi)
+    lo_c, hi_c = lo, hi  # (the comparisons with constants: one region, by the game's)
+    for (var, _op, c), t, meta in zip(specs, truths, metas):
+        if meta is None:
             continue
         down, estimate = meta
         try:
             b = float(term_value(estimate, inputs))
             f = _test(c, var, inputs)
         except (KeyError, ValueError):  # (an input it reads cannot be read)
-            unread.append(var)
+            unread = True
             continue
-        end = threshold(f, bool(down), b)
-        if down:  # (true: x <= end; false: x > end)
-            if t:
-                hi = min(hi, end)
-            else:
-                lo = max(lo, math.nextafter(end, math.inf))
-        elif t:  # (true: x >= end; false: x < end)
-            lo = max(lo, end)
-        else:
-            hi = min(hi, math.nextafter(end, -math.inf))
+        lo, hi = _narrow("<=" if down else ">=", threshold(f, bool(down), b), t, lo, hi)
     var = specs[0][0]
-    if unread:
-        value = min(max(fallback, lo), hi) if lo <= hi else fallback
-        return value, (f"{var}: a bound of it reads an input that cannot be read; {value!r}, "
-                       f"nearest the fallback's {fallback!r}")
+    if not unread and lo <= hi:
+        target = x if x == x else fallback
+        return min(max(target, lo), hi), ""
     if lo > hi:
-        return fallback, (f"{var}: no finite number gives its decided comparisons at this "
-                          f"tick; the fallback's {fallback!r}")
-    target = x if x == x else fallback
-    return min(max(target, lo), hi), ""
+        lo, hi = lo_c, hi_c
+    value = min(max(fallback, lo), hi) if lo <= hi else fallback
+    why = ("a bound of it reads an input that cannot be read" if unread else
+           "no finite number gives its decided comparisons at this tick")
+    return value, f"{var}: {why}; {value!r}, nearest the fallback's {fallback!r}"
+
+
+def _narrow(op: str, c: float, t: int, lo: float, hi: float) -> tuple[float, float]:
+    """``[lo, hi]`` narrowed by the truth ``t`` of ``x op c`` (``op`` in ``< <= > >=``)."""
+    o = op if t else _NOT[op]
+    if o == "<=":
+        hi = min(hi, c)
+    elif o == "<":
+        hi = min(hi, math.nextafter(c, -math.inf))
+    elif o == ">=":
+        lo = max(lo, c)
+    elif o == ">":
+        lo = max(lo, math.nextafter(c, math.inf))
+    return lo, hi
 
 
 def scaled(names: tuple[str, ...] | list[str], decided: dict[str, Any],

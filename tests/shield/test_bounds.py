@@ -143,6 +143,12 @@ def test_a_bound_no_finite_number_meets_is_a_fault_with_the_fallbacks_number():
                 {"linear_velocity": 0.4, "angular_velocity": 0.0})
     assert d.outputs["linear_velocity"] == 0.0
     assert d.fault.startswith("input front_dist is NaN") and "bound linear_velocity" in d.fault
+    # (an infinite bound read as the reals read it: 1.5 * v overflows to -inf below -1.2e308,
+    # where 1.5 * v <= -inf holds in doubles; no such speed is given)
+    d = ShieldRuntime(tables(approach_alone())).step(
+        {"front_dist": -math.inf, "proposed_velocity": 0.4, "in_slowdown": False},
+        {"linear_velocity": 0.4, "angular_velocity": 0.0})
+    assert d.outputs["linear_velocity"] == 0.0 and d.fault.startswith("bound ")
 
 
 def _z3(n, values: dict, z3):
@@ -275,20 +281,30 @@ def _both_ways_rows(rnd) -> list[tuple[dict, dict]]:
     return rows
 
 
-@pytest.mark.parametrize("which", ["shipped", "both ways"])
+@cache
+def approach_alone():
+    """The shield of S2 alone (time before collision: its bound overflows at -inf)."""
+    _s, compiled = shipped()
+    return build_shield([c for c in compiled if c.id == "S2"], INPUTS, OUTPUTS, fork=False,
+                        twists=twists_of(BINDINGS))
+
+
+@pytest.mark.parametrize("which", ["shipped", "both ways", "approach alone"])
 def test_the_c_form_decides_as_the_python_form_tick_by_tick(tmp_path, which):
-    """The C form (strict flags, AddressSanitizer and UBSan) of the shipped shield and of
-    bounds both ways (strict comparisons, thresholds upwards) over 2,000 random ticks with
-    infinite, NaN and tied distances and proposals: every output, the override and the
-    fault as the Python form's."""
+    """The C form (strict flags, AddressSanitizer and UBSan) of the shipped shield, of
+    bounds both ways (strict comparisons, thresholds upwards) and of the approach rule alone
+    (``1.5 * v <= -inf`` holds in doubles by overflow) over 2,000 random ticks with infinite,
+    NaN and tied distances and proposals: every output, the override and the fault as the
+    Python form's."""
     import random
 
     needs_cc()
-    shield = shipped()[0] if which == "shipped" else both_ways()[0]
-    ins, outs = (INPUTS, OUTPUTS) if which == "shipped" else (["d", "p", "s"], ["v"])
+    shield = {"shipped": shipped()[0], "both ways": both_ways()[0],
+              "approach alone": approach_alone()}[which]
+    ins, outs = (["d", "p", "s"], ["v"]) if which == "both ways" else (INPUTS, OUTPUTS)
     write(render_c(shield, "t"), tmp_path)
     exe = build(tmp_path, ["t_shield.c", "t_shield_run.c"], "run")
-    rows = (_shipped_rows if which == "shipped" else _both_ways_rows)(random.Random(7))
+    rows = (_both_ways_rows if which == "both ways" else _shipped_rows)(random.Random(7))
     got = subprocess.run([str(exe)], input=_csv_rows(rows, ins, outs), capture_output=True,
                          text=True, timeout=120)
     assert got.returncode == 0 and not got.stderr, got.stderr
@@ -303,8 +319,8 @@ def test_the_c_form_decides_as_the_python_form_tick_by_tick(tmp_path, which):
             d.fault.split(" ")[0]
         assert (c["overridden"], c["fault"]) == (str(int(d.overridden)), kind), (d, c)
         faults.add(kind)
-    assert faults >= ({"", "input", "bound", "proposal"} if which == "shipped"
-                      else {"", "bound", "proposal"})  # (every case met)
+    assert faults >= ({"", "bound", "proposal"} if which == "both ways"
+                      else {"", "input", "bound", "proposal"})  # (every case met)
 
 
 def test_the_ros2_form_reads_the_proposal_and_publishes_one_scaled_twist():
@@ -394,7 +410,40 @@ def test_twists_are_checked_and_their_errors_name_where_they_are(tmp_path):
         build_shield(compiled, ["p"], ["v"], fork=False, twists=[["v", "w"]])
     with pytest.raises(ShieldError, match="is named twice"):
         build_shield(compiled, ["p"], ["v", "w"], fork=False, twists=[["v", "w"], ["w", "v"]])
+    from fretc.signals.bindings.files import load_bindings
+
+    b.write_text('[tick]\nperiod = "100 ms"\n[variables]\nv = "/c.linear.x"\n'
+                 'w = "/c.angular.z"\nspeed = "abs(/c.angular.z)"\n', encoding="utf-8")
+    two = compile_text("R1: sw shall always satisfy v <= 0.3 * p & speed <= 0.5\n", tmp_path,
+                       "t.fret")
+    with pytest.raises(ShieldError, match=r"w reads /c\.angular\.z, which the output speed "
+                                          r"reads too \(.*b\.bindings\.toml:6\)"):
+        build_shield(two, ["p"], ["v", "w", "speed"], fork=False, bindings=load_bindings(b),
+                     twists=[["v", "w"]])
     clustered = compile_text("R1: sw shall always satisfy w < u\n", tmp_path, "c.fret")
     with pytest.raises(ShieldError, match="R1 .*: w is in a twist and compared with other "
                                           "outputs"):
         build_shield(clustered, [], ["w", "u"], fork=False, twists=[["w", "u"]])
+
+
+def test_a_bounded_output_sharing_its_field_with_another_output_is_refused(tmp_path):
+    """``linear_velocity`` bounded by the distance beside Safe-ROS's ``stopped`` and
+    ``linear_speed = abs(linear.x)``: the game would choose their comparisons of the one
+    number apart from the bound's (a speed above 0.15 with a velocity held below 0.08); the
+    shield refuses it, naming the bound's requirement, the other output and the field."""
+    from fretc.signals.bindings.files import load_bindings
+
+    b = tmp_path / "b.bindings.toml"
+    b.write_text('[tick]\nperiod = "100 ms"\n[variables]\nd = "/d.data"\n'
+                 'linear_velocity = "/c.linear.x"\nlinear_speed = "abs(/c.linear.x)"\n',
+                 encoding="utf-8")
+    compiled = compile_text("R4: sw shall always satisfy linear_speed <= 0.5\n"
+                            "A1: sw shall always satisfy linear_velocity <= 0.5 * (d - 0.3)\n",
+                            tmp_path)
+    with pytest.raises(ShieldError, match=r"A1 \(.*\): linear_velocity is bounded by the "
+                                          r"inputs and reads /c\.linear\.x, which the output "
+                                          r"linear_speed reads too \(.*b\.bindings\.toml:6\)"):
+        build_shield(compiled, ["d"], ["linear_velocity", "linear_speed"], fork=False,
+                     bindings=load_bindings(b))
+    # (without bindings the two are two numbers, and the shield is made)
+    build_shield(compiled, ["d"], ["linear_velocity", "linear_speed"], fork=False)
