@@ -192,7 +192,8 @@ def build_shield(compiled: Sequence[Any], inputs: Sequence[str], outputs: Sequen
                  budget: Budget | None = None, name: str = "shield",
                  fork: bool = True, fallback: dict[str, Any] | None = None,
                  assumptions: Sequence[Any] = (),
-                 twists: Sequence[Sequence[str]] = ()) -> Shield:
+                 twists: Sequence[Sequence[str]] = (),
+                 twists_where: str = "[shield] twists") -> Shield:
     """Synthesize the shield of ``compiled`` (:class:`fretc.compiler.build.Compiled`) for the
     FRET variables ``inputs`` (the environment's) and ``outputs`` (the controller's), with
     ``bindings`` relating outputs of one message, ``prefer`` the tie-breaking preferences,
@@ -200,7 +201,8 @@ def build_shield(compiled: Sequence[Any], inputs: Sequence[str], outputs: Sequen
     process (False: in this one, for tests), ``fallback`` the declared outputs of a tick
     whose inputs cannot be read (:mod:`fretc.shield.fallback`; None: the shield's own),
     ``assumptions`` the environment's (compiled; the games take them, :mod:`fretc.shield.plan`),
-    ``twists`` the outputs scaled together (``[shield] twists``, :mod:`fretc.shield.twists`).
+    ``twists`` the outputs scaled together (``[shield] twists``, :mod:`fretc.shield.twists`;
+    ``twists_where`` where they are written, for a refusal).
 
     Raises:
         ShieldError: a free-form requirement (no formula), a requirement that cannot be
@@ -218,7 +220,7 @@ def build_shield(compiled: Sequence[Any], inputs: Sequence[str], outputs: Sequen
     from fretc.shield.twists import check_twists
 
     twists = check_twists(twists, outputs, _numbers([*compiled, *assumptions]), integers,
-                          _booleans([*compiled, *assumptions]))
+                          _booleans([*compiled, *assumptions]), twists_where)
     try:
         p = plan(compiled, inputs, outputs, bindings, integers, assumptions, twists)
     except PredicateBudget as exc:

@@ -24,7 +24,7 @@ from pathlib import Path
 
 from fretc.shield.plan import ShieldError
 
-__all__ = ["twists_of", "check_twists"]
+__all__ = ["twists_of", "twists_where", "check_twists"]
 
 
 def _where(text: str, source: str) -> str:
@@ -35,6 +35,15 @@ def _where(text: str, source: str) -> str:
         if m:
             return f"{source}:{i}:{m.start(1) + 1}"
     return source
+
+
+def twists_where(bindings_file: str | Path | None) -> str:
+    """``file:line:col: [shield] twists`` of a binding file's key (what a refusal of a twist
+    names), ``[shield] twists`` without a file."""
+    if bindings_file is None:
+        return "[shield] twists"
+    text = Path(bindings_file).read_text(encoding="utf-8")
+    return f"{_where(text, str(bindings_file))}: [shield] twists"
 
 
 def twists_of(bindings_file: str | Path | None) -> list[list[str]]:
@@ -60,11 +69,13 @@ def twists_of(bindings_file: str | Path | None) -> list[list[str]]:
 
 def check_twists(twists: Sequence[Sequence[str]], outputs: Sequence[str],
                  numbers: Collection[str], integers: Collection[str],
-                 booleans: Collection[str]) -> list[list[str]]:
+                 booleans: Collection[str], where: str = "[shield] twists"
+                 ) -> list[list[str]]:
     """``twists`` checked against the shield's ``outputs``: each names declared outputs, at
     least two, none twice nor in two twists; none a boolean (``booleans``: read as one by a
     requirement) or a whole number (``integers``); ``numbers`` (the variables requirements
-    read as numbers) are numbers, an output no requirement reads is taken for one.
+    read as numbers) are numbers, an output no requirement reads is taken for one. ``where``
+    begins a refusal (:func:`twists_where`).
 
     Raises:
         ShieldError: naming the twist, the variable and why."""
@@ -74,21 +85,21 @@ def check_twists(twists: Sequence[Sequence[str]], outputs: Sequence[str],
         names = list(t)
         shown = "[" + ", ".join(names) + "]"
         if len(names) < 2:
-            raise ShieldError(f"[shield] twists: {shown} names fewer than two outputs")
+            raise ShieldError(f"{where}: {shown} names fewer than two outputs")
         for v in names:
             if v not in outputs:
-                raise ShieldError(f"[shield] twists: {shown} names {v}, not an output ("
+                raise ShieldError(f"{where}: {shown} names {v}, not an output ("
                                   + ", ".join(outputs) + ")")
             if v in seen:
-                raise ShieldError(f"[shield] twists: {v} is named twice"
+                raise ShieldError(f"{where}: {v} is named twice"
                                   + ("" if seen[v] == k else " (in two twists: a speed "
                                      "has one path)"))
             seen[v] = k
             if v in booleans and v not in numbers:
-                raise ShieldError(f"[shield] twists: {shown}: {v} is a boolean (a twist "
+                raise ShieldError(f"{where}: {shown}: {v} is a boolean (a twist "
                                   "scales speeds)")
             if v in integers:
-                raise ShieldError(f"[shield] twists: {shown}: {v} takes whole numbers, "
+                raise ShieldError(f"{where}: {shown}: {v} takes whole numbers, "
                                   "which scaling does not keep")
         out.append(names)
     return out

@@ -408,6 +408,13 @@ def test_twists_are_checked_and_their_errors_name_where_they_are(tmp_path):
     compiled = compile_text("R1: sw shall always satisfy v <= 0.3 * p\n", tmp_path)
     with pytest.raises(ShieldError, match="names w, not an output"):
         build_shield(compiled, ["p"], ["v"], fork=False, twists=[["v", "w"]])
+    # (the command names the key's file, line and column; exit 2)
+    b.write_text(f'[tick]\nperiod = "100 ms"\n[variables]\np = "/p.data"\nv = "/c.x"\n'
+                 f'[shield]\ntwists = [["v", "w"]]\n', encoding="utf-8")
+    got = CliRunner().invoke(main, ["shield", str(tmp_path / "reqs.fret"), "-b", str(b),
+                                    "--inputs", "p", "--outputs", "v"])
+    assert got.exit_code == 2 and "b.bindings.toml:7:1: [shield] twists: [v, w] names w, " \
+        "not an output (v)" in " ".join(got.output.split()), got.output
     with pytest.raises(ShieldError, match="is named twice"):
         build_shield(compiled, ["p"], ["v", "w"], fork=False, twists=[["v", "w"], ["w", "v"]])
     from fretc.signals.bindings.files import load_bindings

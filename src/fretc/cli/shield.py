@@ -88,7 +88,7 @@ def shield_cmd(files: tuple[str, ...], inputs: str | None, outputs: str | None,
     from fretc.fretish.fret_variables import fret_declarations
     from fretc.shield.build import ShieldUnknown, build_shield, parse_preferences, with_margin
     from fretc.shield.fallback import declared_fallback, parse_fallback
-    from fretc.shield.twists import twists_of
+    from fretc.shield.twists import twists_of, twists_where
 
     if forms and out_dir is None:
         raise click.UsageError("--emit needs -o DIR")
@@ -124,7 +124,8 @@ def shield_cmd(files: tuple[str, ...], inputs: str | None, outputs: str | None,
                             prefer=parse_preferences(prefer),
                             budget=Budget(work=budget, memory=memory_budget, cpu=query_cpu),
                             name=name or Path(files[0]).stem, fallback=declared,
-                            assumptions=assumed, twists=twists)
+                            assumptions=assumed, twists=twists,
+                            twists_where=twists_where(bindings_file))
 
     try:
         shield = make(margin)
