@@ -409,8 +409,8 @@ def test_twists_are_checked_and_their_errors_name_where_they_are(tmp_path):
     with pytest.raises(ShieldError, match="names w, not an output"):
         build_shield(compiled, ["p"], ["v"], fork=False, twists=[["v", "w"]])
     # (the command names the key's file, line and column; exit 2)
-    b.write_text(f'[tick]\nperiod = "100 ms"\n[variables]\np = "/p.data"\nv = "/c.x"\n'
-                 f'[shield]\ntwists = [["v", "w"]]\n', encoding="utf-8")
+    b.write_text('[tick]\nperiod = "100 ms"\n[variables]\np = "/p.data"\nv = "/c.x"\n'
+                 '[shield]\ntwists = [["v", "w"]]\n', encoding="utf-8")
     got = CliRunner().invoke(main, ["shield", str(tmp_path / "reqs.fret"), "-b", str(b),
                                     "--inputs", "p", "--outputs", "v"])
     assert got.exit_code == 2 and "b.bindings.toml:7:1: [shield] twists: [v, w] names w, " \
