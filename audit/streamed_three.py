@@ -1,34 +1,28 @@
 """CSV traces whose comparisons read NaN, or with ``unknown`` cells or ``gap`` rows, judged in
 three-valued semantics while they are read: the verdict, LTL3 verdict and evidence
-:func:`fretc.audit.unknown_ticks.judge_three` gives over the whole trace, in memory that does
-not grow with the trace.
+:func:`fretc.audit.unknown_ticks.judge_three` gives over the whole trace's columns, in memory
+that does not grow with the trace.
 
 A requirement judged as a CSV trace is read (:mod:`fretc.audit.streamed`) gives up at the
 first chunk where one of its comparisons reads NaN, and one reading a column with an
-``unknown`` cell is given up at the end: those ticks are unknown (fretc's NaN rule,
-docs/guide/ticks.md), and its verdict is what every way of filling them agrees on. On a
-trace with a ``gap`` row (one tick or more, how many not known) every requirement is judged
-by the whole-trace judge, which reads a gap row as every count of ticks
-(:class:`fretc.monitors.three_valued.ThreeValued`'s ``stretch``). The
-audit then reads the trace again, within the bytes the first read read
-(:attr:`fretc.logs.CsvSource.extent`), with these streams for each such requirement, each
-the counterpart of one part of the three-valued judge:
+``unknown`` cell, or any on a trace with a ``gap`` row (every column unknown there, one tick
+or more, how many not known), is given up at the end: those ticks are unknown (fretc's NaN
+rule, docs/guide/ticks.md), and its verdict is what every way of filling them, and every
+count of a gap's ticks, agrees on. The audit then reads the trace again, within the bytes
+the first read read (:attr:`fretc.logs.CsvSource.extent`), feeding each such requirement the
+three-valued judge's own objects a chunk of rows at a time (the gap rows as gap ticks):
 
 * Kleene's reading of the pt formula at the last tick
-  (:class:`fretc.monitors.kleene_stream.KleeneStream`, equal to
-  :meth:`fretc.monitors.three_valued.ThreeValued.pair`);
+  (:class:`fretc.monitors.three_valued.KleeneStream`);
 * the LTL3 verdict over every letter an unknown tick may be
-  (:class:`fretc.monitors.kleene_stream.Ltl3SetStream`, equal to
-  :func:`fretc.monitors.three_valued.ltl3_verdict`);
+  (:class:`fretc.monitors.three_valued.Ltl3SetStream`);
 * the evidence of the definite failed triggers
-  (:class:`fretc.monitors.definite_stream.DefiniteStream`, equal to
-  :func:`fretc.monitors.judge3.definite_evidence`);
+  (:class:`fretc.monitors.definite.DefiniteStream`);
 * the NaN ticks (how many, the first and the last: the ``nan`` data problem) and the ticks
   it reads unknown (the NaN ticks and the ``unknown`` cells, whose rows the first read
   listed: the verdict's unknown ticks and the reason of an unknown verdict);
 * every completion of the unknown ticks, for where Kleene's reading is open at the last tick
-  (:class:`fretc.monitors.completions_stream.CompletionsStream`, equal to
-  :func:`fretc.monitors.completions.completed_verdict`, with its bounds and their reason):
+  (:class:`fretc.monitors.completions.CompletionsStream`, with its bounds and their reason):
   followed in the same read from the first to the last tick the first read found unknown
   (the NaN ticks it saw, the ``unknown`` cells' rows), and kept when those are the ticks
   where a leaf of the pt formula is unknown (Kleene's stream finds them); otherwise, or past
@@ -37,15 +31,14 @@ the counterpart of one part of the three-valued judge:
 The verdict is then set by :func:`finalize_three` as :func:`fretc.audit.finalize.finalize`
 sets it after :func:`~fretc.audit.unknown_ticks.judge_three`: the audit JSON is the same
 bytes (``tests/audit/test_streamed.py``). A requirement is judged whole after all where the
-streams cannot take it: an automaton or atom they do not evaluate a chunk at a time (an
-uninterpreted function, a comparison over ``pre``), a leaf of the pt formula that reads
-earlier ticks (the completions' program), more than
-:data:`fretc.monitors.definite_stream.MAX_RUNS` runs of unknown ticks, a ``gap`` row, or a
-``cut`` row (judged whole as before). Memory: per requirement the streams'
-state (as :mod:`fretc.audit.streamed`'s, the runs of unknown ticks, at most
+streams cannot take it a chunk at a time: an automaton or atom they do not evaluate a chunk at
+a time (an uninterpreted function, a comparison over ``pre``), more than
+:data:`fretc.monitors.definite.MAX_RUNS` runs of unknown ticks, or a ``cut`` row (judged
+whole as before). Memory: per requirement the streams' state (as
+:mod:`fretc.audit.streamed`'s, the runs of unknown ticks, at most
 :data:`fretc.monitors.completions.MAX_STATES` states of the completions), and the rows of the
-trace's ``unknown`` cells. CPU: one read of the trace more (two where the completions could
-not be followed beside the other streams).
+trace's ``unknown`` cells and ``gap`` rows. CPU: one read of the trace more (two where the
+completions could not be followed beside the other streams).
 """
 
 from __future__ import annotations
@@ -59,19 +52,18 @@ import numpy as np
 from fretc.common.problems import NAN
 from fretc.fretish import ast as A
 from fretc.logs import CsvSource
-from fretc.monitors.definite_stream import DefiniteStream
+from fretc.monitors.completions import CompletionsStream, TooManyStates
+from fretc.monitors.definite import DefiniteStream
 from fretc.monitors.expressions import EvidenceUnsupported
 from fretc.monitors.interval import Evidence
-from fretc.monitors.completions import TooManyStates
-from fretc.monitors.completions_stream import CompletionsStream, completions_unsupported
 from fretc.monitors.judge import compared_exprs
-from fretc.monitors.kleene_stream import KleeneStream, Ltl3SetStream
 from fretc.monitors.nan import nan_ticks_of
+from fretc.monitors.three_valued import KleeneStream, Ltl3SetStream
 from fretc.monitors.vectorized import VectorizeError
 from fretc.audit.finalize import StreamTicks, decided
 from fretc.audit.streamed import GAP_ROW, NAN_REASON, UNKNOWN_CELLS, CsvStreams
-from fretc.audit.unknown_ticks import (COMPLETED_NOTE, outgrew_words, pt_decides_note,
-                                       unknown_reason)
+from fretc.audit.unknown_ticks import (COMPLETED_NOTE, gap_words, outgrew_words,
+                                       pt_decides_note, unknown_reason)
 from fretc.audit.verdict import Ltl3
 
 if TYPE_CHECKING:
@@ -94,7 +86,7 @@ class ThreeResult:
     Attributes:
         holds: FRET's finite-trace verdict in every completion of the NaN ticks (True:
             satisfied or vacuous; False: violated).
-        evidence: the definite evidence (:class:`fretc.monitors.definite_stream.DefiniteStream`).
+        evidence: the definite evidence (:class:`fretc.monitors.definite.DefiniteStream`).
         times: tick -> time (ns) of every tick the evidence names.
         ltl3: ``(status, tick, time)`` of the three-valued LTL3 verdict.
         last_hi: the last tick at which the pt formula may be true (None: none).
@@ -182,7 +174,10 @@ class ThreeStreams:
     open: dict[int, tuple[RequirementPlan, tuple[int, int] | None]] = field(
         default_factory=dict)
     #: column -> the rows (ascending) of its ``unknown`` cells, as the first read found them
+    #: (the ``gap`` rows among them: every column unknown there)
     unknown_rows: dict[str, np.ndarray] = field(default_factory=dict)
+    #: the ``gap`` rows (ascending): gap ticks, each one tick or more
+    gap_rows: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
 
     @classmethod
     def of(cls, requirements: Iterable[RequirementPlan]) -> ThreeStreams:
@@ -211,10 +206,11 @@ class ThreeStreams:
         self.last_time = int(times[-1])
         self.n = first + k
         marked = _cells(self.unknown_rows, first, k)
+        stretch = _cells({"": self.gap_rows}, first, k).get("")
         for s in self.streams:
             if s.gave_up is None:
                 try:
-                    _feed(s, columns, k, times, first, marked)
+                    _feed(s, columns, k, times, first, marked, stretch)
                 except (KeyError, VectorizeError, EvidenceUnsupported) as exc:
                     s.gave_up = f"cannot be read a chunk at a time ({exc})"
 
@@ -225,8 +221,6 @@ class ThreeStreams:
             lo, hi, last_hi = s.kleene.finish() if self.n else (False, True, None)
             why = s.gave_up or ("more runs of unknown ticks than the streams keep"
                                 if s.definite.too_many else None)
-            if why is None and lo != hi:
-                why = completions_unsupported(s.r.formalization.pt)  # type: ignore[union-attr]
             settled = None
             if why is None and lo != hi and s.completions is not None \
                     and s.kleene.free == s.range:  # (the same search as one more read)
@@ -240,6 +234,7 @@ class ThreeStreams:
                 what = ", ".join(([f"unknown values of {', '.join(marked)}"] if marked
                                   else []) + (["comparisons with NaN"]
                                               if s.nan_only or not marked else []))
+                what += gap_words(int(np.sum(self.gap_rows < self.n)))
                 self.results[i] = ThreeResult(lo if lo == hi else None, ev, times, ltl3,
                                               last_hi, s.definite.possible_trigger,
                                               (s.nan[0], s.nan[1], s.nan[2], s.nan[3],
@@ -269,10 +264,10 @@ def _cells(unknown_rows: Mapping[str, np.ndarray], first: int, k: int
 
 
 def _feed(s: _Three, columns: Mapping[str, np.ndarray], k: int, times: np.ndarray,
-          first: int, marked: Mapping[str, np.ndarray]) -> None:
+          first: int, marked: Mapping[str, np.ndarray], stretch: np.ndarray | None) -> None:
     """Feed one chunk of ``k`` rows (the trace's rows ``first ..``; ``marked``: column ->
-    its ``unknown`` cells in the chunk) to the streams of ``s``. Raises KeyError for a
-    missing column, or what the streams raise."""
+    its ``unknown`` cells in the chunk; ``stretch``: its ``gap`` rows, or None) to the
+    streams of ``s``. Raises KeyError for a missing column, or what the streams raise."""
     cols = {n: np.asarray(columns[n])[:k] for n in s.names}
     nan = nan_ticks_of(s.exprs, cols, k)
     bad = np.flatnonzero(nan)
@@ -294,39 +289,40 @@ def _feed(s: _Three, columns: Mapping[str, np.ndarray], k: int, times: np.ndarra
         if s.unknown[0] == 0:
             s.unknown[1], s.unknown[2] = first + int(at[0]), int(times[at[0]])
         s.unknown[0] += len(at)
-    s.kleene.feed(cols, unknown, k)
+    s.kleene.feed(cols, unknown, k, stretch)
     if s.completions is not None and not s.outgrew:
         try:
-            s.completions.feed(cols, unknown, k)
+            s.completions.feed(cols, unknown, k, stretch)
         except TooManyStates as exc:
             s.outgrew = str(exc)
         if len(s.completions.carries or ()) > CONCURRENT_STATES:
             s.completions = None  # (too many completions to follow beside the others)
-    s.definite.feed(cols, unknown, k, times)
+    s.definite.feed(cols, unknown, k, times, stretch)
     if s.ltl3 is not None:
-        s.ltl3.feed(cols, unknown, k, times)
+        s.ltl3.feed(cols, unknown, k, times, stretch)
 
 
 def judged_three(plan: AuditPlan, streams: CsvStreams, source: CsvSource) -> None:
     """Read the CSV trace of ``source`` again (within its first read's bytes,
     :attr:`fretc.logs.CsvSource.extent`) with the three-valued streams of the requirements
-    ``streams`` gave up for a NaN (:data:`NAN_REASON`), on a trace without ``gap`` or
-    ``cut`` rows and without ``unknown`` cells in the columns they read; those decided move
-    from ``streams.whole`` to ``streams.results`` (a :class:`ThreeResult`)."""
+    ``streams`` gave up for a NaN (:data:`NAN_REASON`), ``unknown`` cells in the columns
+    they read (:data:`UNKNOWN_CELLS`) or a ``gap`` row (:data:`GAP_ROW`), on a trace without
+    a ``cut`` row; those decided move from ``streams.whole`` to ``streams.results`` (a
+    :class:`ThreeResult`)."""
     if source.cut_time is not None:
         return
     by_index = {r.index: r for r in plan.requirements}
     gaps = source.gap_rows
     todo = [by_index[i] for i, why in streams.whole.items()
-            if (why in (NAN_REASON, GAP_ROW) or why.startswith(UNKNOWN_CELLS))
-            and not gaps]
+            if why in (NAN_REASON, GAP_ROW) or why.startswith(UNKNOWN_CELLS)]
     three = ThreeStreams.of(todo)
     if not three.streams:
         return
-    # (a gap row: every column unknown there, as csv_marks marks it)
+    # (a gap row: every column unknown there, as csv_marks marks it, and a gap tick)
     three.unknown_rows = {c: np.asarray(sorted({*source.unknown_rows.get(c, ()), *gaps}),
                                         np.int64) for c in three.names
                           if source.unknown_rows.get(c) or gaps}
+    three.gap_rows = np.asarray(sorted(gaps), np.int64)
     for s in three.streams:  # (the completions beside them, from the first read's ticks)
         ends = list(streams.nan_ranges.get(s.r.index, ()))
         for c in s.names:
@@ -334,7 +330,7 @@ def judged_three(plan: AuditPlan, streams: CsvStreams, source: CsvSource) -> Non
             if rows is not None and len(rows):
                 ends += [int(rows[0]), int(rows[-1])]
         pt = s.r.formalization.pt  # type: ignore[union-attr]  # (streamed: formalized)
-        if ends and completions_unsupported(pt) is None:
+        if ends:
             s.range = (min(ends), max(ends))
             s.completions = CompletionsStream(pt, *s.range, streams.n)
     CsvSource(str(source.path), period_ns=source.period_ns, keep=(), sink=three,
@@ -376,7 +372,7 @@ def _completions(source: CsvSource, three: ThreeStreams) -> None:
             cells = {c: m for c, m in _cells(three.unknown_rows, first, k).items()
                      if c in cols}
             try:
-                run.feed(cols, cells, k)
+                run.feed(cols, cells, k, _cells({"": three.gap_rows}, first, k).get(""))
             except TooManyStates as exc:
                 failed[i] = str(exc)
 

@@ -13,7 +13,7 @@ the end").
 * A gap tick (a CSV trace's ``gap`` row; on a clock that ticks on a topic's messages, the
   tick a gap of that topic lost) stands for one tick or more, how many not known: the
   verdict is the one every count and every filling agrees on
-  (:class:`fretc.monitors.three_valued.ThreeValued`'s ``stretch``).
+  (:mod:`fretc.monitors.three_valued`, "Gap ticks").
 * The three-valued judge needs the requirement's pt formula over columns. Requirements
   without it (a future-time function, FRET leaves those unexpanded in pt) are judged as on
   a cut log instead: up to their first unknown tick (:func:`fretc.audit.finalize.prepare`).
@@ -28,12 +28,8 @@ import numpy as np
 from fretc.logs.recorded_gaps import SILENT_CAUSES
 from fretc.audit.damage import open_obligations, verdict_at_damage
 from fretc.audit.columns import ClockPass
-from fretc.monitors.completions import decide
-from fretc.monitors.interval import EvidenceUnsupported, evaluate_requirement
-from fretc.monitors.judge3 import definite_evidence
-from fretc.monitors.unknowns import Unknowns, possible_trigger
-from fretc.monitors.three_valued import ThreeValued, ltl3_verdict
-from fretc.monitors.vectorized import VectorizeError
+from fretc.monitors.interval import EvidenceUnsupported
+from fretc.monitors.judge3 import judge_three as judged_three
 
 if TYPE_CHECKING:
     from fretc.monitors.interval import Evidence
@@ -41,8 +37,8 @@ if TYPE_CHECKING:
     from fretc.audit.verdict import Verdict
     from fretc.audit.model import RequirementPlan
 
-__all__ = ["judge_three", "gap_ticks", "pt_decides_note", "unknown_reason", "outgrew_words",
-           "COMPLETED_NOTE"]
+__all__ = ["judge_three", "gap_ticks", "gap_words", "pt_decides_note", "unknown_reason",
+           "outgrew_words", "COMPLETED_NOTE"]
 
 
 def judge_three(r: RequirementPlan, res: ClockPass, v: Verdict, j: Judgement, nan_unknown: bool,
@@ -58,27 +54,18 @@ def judge_three(r: RequirementPlan, res: ClockPass, v: Verdict, j: Judgement, na
     """
     assert r.requirement is not None and r.formalization is not None  # (judged: formalized)
     n = len(res.times)
-    gaps = gap_ticks(res)
-    ev3 = ThreeValued(res.columns, res.unknown, n, nan_unknown, gaps)
-    # Kleene's reading, and where it is open every completion's
-    holds, (lo, hi), why = decide(r.formalization.pt, ev3)
-    completed = holds is not None and not lo[-1] and bool(hi[-1])
+    online = not r.offline and r.monitor_source is not None
+    # (the definite evidence where the judge found the interval semantics' over the ticks)
+    three = judged_three(r.requirement, r.formalization, res.columns, res.unknown, n,
+                         nan_unknown=nan_unknown, stretch=gap_ticks(res),
+                         monitor_source=r.monitor_source if online else None,
+                         evidence=j.evidence is not None)
+    holds, why = three.holds, three.why
     outgrew = outgrew_words(why)
-    status, st_tick = "unknown", None
-    if not r.offline and r.monitor_source is not None:
-        try:
-            status, st_tick = ltl3_verdict(r.monitor_source, ev3)
-        except VectorizeError:
-            status, st_tick = "unknown", None
+    status, st_tick = three.ltl3
     v.unknown_ticks = int(unknown.sum())
-    ev = j.evidence
-    parts = None
+    ev = three.evidence
     if ev is not None:
-        parts = Unknowns.of(r.requirement, res.unknown, res.columns, n, nan_unknown, gaps)
-        # the failed triggers the known ticks make: unknown ticks set to meet the obligation
-        ev = evaluate_requirement(r.requirement, res.columns, n, r.formalization.ticks,
-                                  favour=parts)
-        ev = definite_evidence(r.requirement, ev, parts, res.columns)
         v.intervals, v.triggers, v.violations = ev.intervals, ev.triggers, ev.violations
     if res.intact_end is not None:  # and a cut at the end: a definite LTL3 verdict decides
         holds = _at_cut(r, res, v, holds, ev, status, st_tick, n)
@@ -87,13 +74,13 @@ def judge_three(r: RequirementPlan, res: ClockPass, v: Verdict, j: Judgement, na
         v.unknown_reason = _why(res, unknown, n, outgrew, r.judged_variables)
     if holds is True and ev is not None and ev.triggers == 0:
         ev.vacuous = True
-        if parts is not None and possible_trigger(parts):
+        if three.possible_trigger:
             v.notes.append("vacuous on the ticks read: a trigger may have fired in unknown "
                            "ticks, and the requirement holds whichever way")
     elif ev is not None:
         ev.vacuous = False
     if holds is False and ev is not None and ev.violation is None:
-        v.notes.append(_COMPLETED if completed else _pt_decides(hi))
+        v.notes.append(_COMPLETED if three.completed else pt_decides_note(three.reading[2]))
     return holds, ev, status, st_tick
 
 
@@ -120,13 +107,6 @@ COMPLETED_NOTE = ("violated whatever the unknown ticks held: its pt formula is f
                   "last tick in every way of filling them (each followed through the "
                   "formula's states; no single failed trigger lies wholly in ticks read)")
 _COMPLETED = COMPLETED_NOTE
-
-
-def _pt_decides(hi: np.ndarray) -> str:
-    """Why a requirement is violated without a definite failed trigger to show (``hi``:
-    where its pt formula may be true, over every tick)."""
-    still = np.flatnonzero(hi)
-    return pt_decides_note(int(still[-1]) if len(still) else None)
 
 
 def pt_decides_note(last_hi: int | None) -> str:
@@ -167,12 +147,16 @@ def _why(res: ClockPass, unknown: np.ndarray, n: int, outgrew: str = "",
     what = ", ".join(causes)
     if res.lost_words:
         what += f": {res.lost_words}"
-    stretched = sum(1 for i in res.tick_gaps if i < n)
-    if stretched:
-        what += (f"; {stretched} of them " + ("a gap tick" if stretched == 1 else
-                                                 "gap ticks, each") +
-                 " standing for one tick or more")
+    what += gap_words(sum(1 for i in res.tick_gaps if i < n))
     return unknown_reason(k, n, what, first, int(res.times[first]), outgrew)
+
+
+def gap_words(stretched: int) -> str:
+    """The words an unknown reason adds for its ``stretched`` gap ticks (empty: none)."""
+    if not stretched:
+        return ""
+    return (f"; {stretched} of them " + ("a gap tick" if stretched == 1 else
+                                          "gap ticks, each") + " standing for one tick or more")
 
 
 def unknown_reason(k: int, n: int, what: str, first: int, first_time: int,

@@ -1,43 +1,57 @@
-"""FRET's finite-trace verdict over every way of filling a trace's unknown ticks, where the
-three-valued (Kleene) evaluation of :mod:`fretc.monitors.three_valued` leaves it open.
+"""FRET's finite-trace verdict over every way of filling a trace's unknown ticks, where Kleene's
+three-valued reading (:mod:`fretc.monitors.three_valued`) leaves it open, over a trace fed a
+chunk of ticks at a time (:class:`CompletionsStream`); judging a whole trace is feeding it one
+chunk (:func:`decide`).
 
-Kleene's evaluation is sound but not complete: an unknown value read twice in one formula
+Kleene's reading is sound but not complete: an unknown value read twice in one formula
 (FRET's ``in m`` reads ``m`` at the mode's entry and at its exit) is two independent unknowns
 to it, so it can call a verdict unknown that every completion of the trace agrees on. With
 ``in m the sw shall always satisfy y``, ``m`` true and ``y`` false at tick 0 and ``m`` unknown
 at tick 2, every completion violates the requirement at tick 0, yet Kleene's pt is unknown:
 a violation the data show would be hidden.
 
-:func:`completed_verdict` decides it: the pt formula is run tick by tick over the set of its
-states (the values its temporal operators keep: ``Y Z`` their operand's last value, ``S T
-O H`` their own, a bounded ``O H`` its operand's last ``hi`` values), every unknown atom at
-an unknown tick standing for both of its values (the atoms: the formula's leaves, each
-comparison, variable or function; their values from the Kleene pair, independent of each
-other). States are merged as they meet, so the set stays small; from the last unknown tick
-on, each state's future is fixed, and one completion leading to it is evaluated over the
-rest of the trace with the vectorized evaluator. Reading the atoms as independent admits
-more completions than the trace's variables can give (``x > 1`` and ``x > 2`` both free),
-so a verdict is what every completion gives, never a guess: True or False only when all of
-them agree, None when they differ; past a bound on the states or the work,
-:class:`TooManyStates`. This is the
-subset construction (Rabin and Scott 1959) over the past-time formula's own state, the
-exact three-valued reading of LTL3 (Bauer, Leucker, Schallhart, TOSEM 2011) for FRET's
-finite-trace semantics.
+The pt formula is run tick by tick over the set of its states (the values its temporal
+operators keep: ``Y Z`` their operand's last value, ``S T O H`` their own, a bounded ``O H``
+its operand's last values: :class:`_Program`), every unknown leaf at an unknown tick standing
+for both of its values (the leaves: the nodes outside the formula's boolean and temporal
+skeleton, :func:`fretc.monitors.three_valued.leaves_of`, their values Kleene's, independent of
+each other), from the first to the last tick where a leaf is unknown or a gap tick lies
+(:attr:`fretc.monitors.three_valued.KleeneStream.free`: found by a reading before). States are
+merged as they meet, so the set stays small. At a gap tick (one tick or more, how many not
+known) every state further ticks of the gap lead to is added. In three stretches of the trace:
+
+1. **before the first**: the values the program's state reads at the tick before it (each
+   temporal operator's operand or own value, a bounded window's last values) are kept from
+   chunk to chunk;
+2. **from the first to the last**: the states are stepped with every value of the unknown
+   leaves, their count and the work bounded (:class:`TooManyStates`);
+3. **after the last**: each state is written as the temporal operators' carried state of
+   :func:`fretc.monitors.three_valued.kleene_values` (a completion's values are definite:
+   ``+inf`` or ``-inf``; a leaf that reads earlier ticks given its values) and the formula
+   evaluated from it over the rest of the trace; its value at the last tick is that
+   completion's verdict.
+
+Reading the leaves as independent admits more completions than the trace's variables can
+give (``x > 1`` and ``x > 2`` both free), so a verdict is what every completion gives, never
+a guess: True or False only when all of them agree, None when they differ. This is the subset
+construction (Rabin and Scott 1959) over the past-time formula's own state, the exact
+three-valued reading of LTL3 (Bauer, Leucker, Schallhart, TOSEM 2011) for FRET's finite-trace
+semantics.
 """
 
 from __future__ import annotations
 
 import itertools
+import math
 from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
 
-from fretc.compiler.ir import Node
-from fretc.monitors.three_valued import Pair, ThreeValued
+from fretc.compiler.ir import Node, walk
+from fretc.monitors.three_valued import SKELETON, KleeneStream, kleene_values, order_of
 
-__all__ = ["decide", "pt_verdict", "completed_verdict", "TooManyStates", "MAX_STATES",
-           "MAX_STEPS"]
+__all__ = ["CompletionsStream", "TooManyStates", "MAX_STATES", "MAX_STEPS", "decide"]
 
 #: the most states (times the letters of one tick) the run keeps
 MAX_STATES = 4096
@@ -46,66 +60,33 @@ MAX_STATES = 4096
 #: requirement at most; ``in m ... always satisfy y``, 21 nodes: about 57,000 ticks)
 MAX_STEPS = 1_200_000
 
+_INF = math.inf
+_TEMPORAL = ("Y", "Z", "O", "H", "S", "T")
+#: operators whose value depends on earlier ticks, inside a leaf
+_STATEFUL = frozenset(("Y", "Z", "O", "H", "S", "T", "pre", "FTP"))
+
 
 class TooManyStates(Exception):
     """The completions were not all followed: the states of one tick or the work of the
     run passed :data:`MAX_STATES` or :data:`MAX_STEPS` (the message says which, and at which
     tick)."""
 
-_SKELETON = ("!", "&", "|", "->", "<->", "xor", "past", "Y", "Z", "O", "H", "S", "T")
-_TEMPORAL = ("Y", "Z", "O", "H", "S", "T")
-
-
-def _order(root: Node) -> list[Node]:
-    """The formula's boolean and temporal nodes, children first, each once (leaves too)."""
-    out: list[Node] = []
-    seen: set[Node] = set()
-    stack: list[tuple[Node, bool]] = [(root, False)]
-    while stack:
-        node, done = stack.pop()
-        if done:
-            if node not in seen:
-                seen.add(node)
-                out.append(node)
-            continue
-        if node in seen:
-            continue
-        stack.append((node, True))
-        if node.op in _SKELETON:
-            stack.extend((a, False) for a in reversed(node.args))
-    return out
-
 
 class _Program:
-    """The pt formula as a program of nodes (:func:`_order`) over one tick's leaf values and
-    the state the temporal nodes keep."""
+    """The pt formula as a program of nodes (:func:`fretc.monitors.three_valued.order_of`)
+    over one tick's leaf values and the state the temporal nodes keep."""
 
     def __init__(self, root: Node):
-        self.nodes = _order(root)
+        self.nodes = order_of(root)
         self.index = {node: k for k, node in enumerate(self.nodes)}
         self.root = self.index[root]
-        self.leaves = [k for k, node in enumerate(self.nodes) if node.op not in _SKELETON]
+        self.leaves = [k for k, node in enumerate(self.nodes) if node.op not in SKELETON]
         self.temporal = [k for k, node in enumerate(self.nodes) if node.op in _TEMPORAL]
-        self.args = [[self.index[a] for a in node.args] if node.op in _SKELETON else []
+        self.args = [[self.index[a] for a in node.args] if node.op in SKELETON else []
                      for node in self.nodes]
         #: the work of one step: the nodes, and the values the bounded operators keep
         self.cost = len(self.nodes) + sum(self.nodes[k].hi or 0 for k in self.temporal
                                           if self.nodes[k].op in ("O", "H"))
-
-    def state_at(self, ev: ThreeValued, i: int) -> tuple[Any, ...]:
-        """The state before tick ``i`` read from ``ev``'s (definite) values at ticks < i."""
-        out: list[Any] = []
-        for k in self.temporal:
-            node = self.nodes[k]
-            if node.op in ("Y", "Z"):
-                out.append(bool(ev.pair(node.args[0])[0][i - 1]) if i else None)
-            elif node.op in ("O", "H") and node.hi is not None:
-                lo = ev.pair(node.args[0])[0]
-                out.append(tuple(bool(lo[j]) if j >= 0 else None
-                                 for j in range(i - 1, i - 1 - node.hi, -1)))
-            else:
-                out.append(bool(ev.pair(node)[0][i - 1]) if i else None)
-        return tuple(out)
 
     def step(self, state: tuple[Any, ...], leaves: dict[int, bool], i: int
              ) -> tuple[bool, tuple[Any, ...]]:
@@ -156,171 +137,233 @@ class _Program:
         return val[self.root], tuple(nxt[k] for k in self.temporal)
 
 
-def completed_verdict(pt: Node, ev: ThreeValued) -> bool | None:
-    """The pt formula at the last of ``ev``'s ticks in every completion of its unknown ticks
-    (module docstring): True when all satisfy, False when all violate, None when they
-    differ.
+class CompletionsStream:
+    """Every completion of the unknown ticks of ``pt`` over ``n`` ticks fed a chunk at a
+    time, the first and last ticks where a leaf is unknown or a gap tick lies being ``first``
+    and ``last`` (module docstring).
+
+    Args:
+        nan_unknown: as :class:`fretc.monitors.three_valued.Kleene`'s.
 
     Raises:
-        TooManyStates: past :data:`MAX_STATES` or :data:`MAX_STEPS`.
-        VectorizeError: a node the three-valued evaluator cannot take.
+        ValueError: (constructor) ``0 <= first <= last < n`` does not hold.
     """
-    n = ev.n
-    if n == 0:
-        return None
-    prog = _Program(pt)
-    lo = {k: ev.pair(prog.nodes[k])[0] for k in prog.leaves}
-    hi = {k: ev.pair(prog.nodes[k])[1] for k in prog.leaves}
-    free_at = np.zeros(n, np.bool_)
-    for k in prog.leaves:
-        free_at |= lo[k] != hi[k]
-    gaps = ev.stretch
-    if gaps is not None:  # (a gap tick is followed whatever its leaves: its count is free)
-        free_at |= gaps
-    free_ticks = np.flatnonzero(free_at)
-    if not len(free_ticks):
-        root_lo = ev.pair(pt)[0]
-        return bool(root_lo[-1])
-    first, last = int(free_ticks[0]), int(free_ticks[-1])
-    # state -> one completion reaching it: a chain (previous chain, tick, {leaf: value})
-    states: dict[tuple[Any, ...], Any] = {prog.state_at(ev, first): None}
-    finals: set[bool] = set()
-    steps = 0
-    for i in range(first, last + 1):
-        known = {k: bool(lo[k][i]) for k in prog.leaves}
-        free = [k for k in prog.leaves if lo[k][i] != hi[k][i]]
-        letters = 1 << len(free)
-        steps += len(states) * letters * prog.cost
-        if len(states) * letters > MAX_STATES:
-            raise TooManyStates(f"{len(states)} states times {letters} letters at tick {i} "
+
+    def __init__(self, pt: Node, first: int, last: int, n: int,
+                 nan_unknown: bool = True) -> None:
+        if not 0 <= first <= last < n:
+            raise ValueError(f"free ticks {first}..{last} outside 0..{n - 1}")
+        self.pt, self.first, self.last, self.n = pt, first, last, n
+        self.nan_unknown = nan_unknown
+        self.prog = prog = _Program(pt)
+        self.leaf_carry: dict[int, dict] = {k: {} for k in prog.leaves}
+        #: leaves whose value reads earlier ticks: given their values after ``last``
+        self.stateful = [k for k in prog.leaves
+                         if any(x.op in _STATEFUL for x in walk(prog.nodes[k]))]
+        #: before ``first``: node -> (its carry, its last definite values, how many kept)
+        self.kept: dict[Node, tuple[dict, list[bool], int]] = {}
+        for k in prog.temporal:
+            node = prog.nodes[k]
+            if node.op in ("Y", "Z"):
+                self.kept.setdefault(node.args[0], ({}, [], 1))
+            elif node.op in ("O", "H") and node.hi is not None:
+                got = self.kept.get(node.args[0])
+                keep = max(node.hi, got[2] if got else 0, 1)
+                self.kept[node.args[0]] = ({}, [], keep)
+            else:
+                self.kept.setdefault(node, ({}, [], 1))
+        self.states: dict[tuple[Any, ...], Any] | None = None
+        self.carries: list[dict] | None = None  # (after ``last``: one per state)
+        self.values: list[float] = []
+        self.finals: set[bool] = set()
+        self.steps = 0
+        self.start = 0
+
+    def feed(self, columns: Mapping[str, np.ndarray], unknown: Mapping[str, np.ndarray],
+             k: int, stretch: np.ndarray | None = None) -> None:
+        """The next ``k >= 0`` ticks (``columns``, ``unknown`` and ``stretch`` as
+        :func:`fretc.monitors.three_valued.kleene_values` takes them).
+
+        Raises:
+            TooManyStates: past :data:`MAX_STATES` or :data:`MAX_STEPS`."""
+        if k <= 0:
+            return
+        a, b = self.start, self.start + k
+        how = dict(nan_unknown=self.nan_unknown, stretch=stretch)
+        if a < self.first:
+            self._before(columns, unknown, k, min(b, self.first) - a, how)
+        values = None
+        if a <= self.last or self.stateful:  # (the leaves' state, for the ticks to come)
+            values = self._leaves(columns, unknown, k, how)
+        if a <= self.last and b > self.first:
+            assert values is not None
+            gaps = None if stretch is None else np.asarray(stretch[:k], np.bool_)
+            self._free(values, gaps, max(a, self.first), min(b - 1, self.last))
+        if b - 1 > self.last:
+            self._after(columns, k, max(a, self.last + 1) - a, values)
+        self.start = b
+
+    def _before(self, columns, unknown, k: int, upto: int, how: dict) -> None:
+        """Keep the values the state at ``first`` reads (ticks ``start .. start+upto-1``)."""
+        for node, (carry, last, keep) in self.kept.items():
+            v = kleene_values(node, columns, unknown, k, self.start, carry, **how)[:upto]
+            last.extend(bool(x) for x in (v[-keep:] > 0).tolist())
+            del last[:-keep]
+
+    def _state_at_first(self) -> tuple[Any, ...]:
+        """The program's state before ``first``, read from the values kept."""
+        out: list[Any] = []
+        i = self.first
+        for k in self.prog.temporal:
+            node = self.prog.nodes[k]
+            if node.op in ("O", "H") and node.hi is not None:
+                last = self.kept[node.args[0]][1]
+                out.append(tuple(last[-1 - d] if d < len(last) and i - 1 - d >= 0 else None
+                                 for d in range(node.hi)))
+            else:
+                last = self.kept[node.args[0] if node.op in ("Y", "Z") else node][1]
+                out.append(last[-1] if i else None)
+        return tuple(out)
+
+    def _leaves(self, columns, unknown, k: int, how: dict) -> dict[int, np.ndarray]:
+        """Each leaf's Kleene value over the chunk (its state carried)."""
+        return {j: kleene_values(self.prog.nodes[j], columns, unknown, k, self.start, carry,
+                                 **how)
+                for j, carry in self.leaf_carry.items()}
+
+    def _free(self, values: dict[int, np.ndarray], gaps: np.ndarray | None, lo_tick: int,
+              hi_tick: int) -> None:
+        """Step the states over the ticks ``lo_tick .. hi_tick`` (in this chunk, whose
+        leaves' values are ``values`` and gap ticks ``gaps``)."""
+        prog, a = self.prog, self.start
+        if self.states is None:
+            self.states = {self._state_at_first(): None}
+        for i in range(lo_tick, hi_tick + 1):
+            known = {j: bool(values[j][i - a] > 0) for j in prog.leaves}
+            free = [j for j in prog.leaves if values[j][i - a] == 0]
+            letters = 1 << len(free)
+            self.steps += len(self.states) * letters * prog.cost
+            self._bound(len(self.states) * letters, letters, f"at tick {i}", i)
+            nxt: dict[tuple[Any, ...], Any] = {}
+            for state in self.states:
+                for bits in itertools.product((False, True), repeat=len(free)):
+                    leaves = dict(known)
+                    leaves.update(zip(free, bits))
+                    root, after = prog.step(state, leaves, i)
+                    if i == self.n - 1:
+                        self.finals.add(root)
+                    nxt.setdefault(after, None)
+            if gaps is not None and gaps[i - a]:
+                self._stretch(nxt, known, free, i)
+            self.states = nxt
+
+    def _bound(self, states: int, letters: int, where: str, i: int) -> None:
+        """Raise :class:`TooManyStates` past the bounds (read as set: tests lower them)."""
+        if states > MAX_STATES:
+            raise TooManyStates(f"{states // letters} states times {letters} letters {where} "
                                 f"(bound {MAX_STATES})")
-        if steps > MAX_STEPS:
+        if self.steps > MAX_STEPS:
             raise TooManyStates(f"more than {MAX_STEPS} node evaluations by tick {i}")
-        nxt: dict[tuple[Any, ...], Any] = {}
-        gap = gaps is not None and bool(gaps[i])
-        for state, chain in states.items():
-            for bits in itertools.product((False, True), repeat=len(free)):
-                leaves = dict(known)
-                leaves.update(zip(free, bits))
-                root, after = prog.step(state, leaves, i)
-                if i == n - 1:
-                    finals.add(root)
-                if after not in nxt:
-                    letter = dict(zip(free, bits))
-                    nxt[after] = ((chain, i, (letter,)) if gap else
-                                  (chain, i, letter) if free else chain)
-        if gap:
-            steps = _stretch(prog, nxt, known, free, i, i == n - 1, finals, steps)
-        states = nxt
-    if last < n - 1:
-        for chain in states.values():
-            finals.add(_evaluate_completion(pt, ev, prog, chain))
-            if len(finals) > 1:
-                return None
-    return finals.pop() if len(finals) == 1 else None
+
+    def _stretch(self, states: dict[tuple[Any, ...], Any], known: dict[int, bool],
+                 free: list[int], i: int) -> None:
+        """Add to ``states`` (those one tick of the gap tick ``i`` leads to) every state
+        further ticks of the gap lead to, each tick any letter of the ``free`` leaves (a gap
+        stands for one tick or more); at the last tick each of them may end the trace."""
+        prog = self.prog
+        frontier = list(states)
+        later = max(i, 1)  # (the gap's later ticks are not the trace's first)
+        letters = 1 << len(free)
+        while frontier:
+            self.steps += len(frontier) * letters * prog.cost
+            self._bound(len(states) * letters, letters, f"in the gap at tick {i}", i)
+            nxt = []
+            for state in frontier:
+                for bits in itertools.product((False, True), repeat=len(free)):
+                    leaves = dict(known)
+                    leaves.update(zip(free, bits))
+                    root, after = prog.step(state, leaves, later)
+                    if i == self.n - 1:
+                        self.finals.add(root)
+                    if after not in states:
+                        states[after] = None
+                        nxt.append(after)
+            frontier = nxt
+
+    def _after(self, columns, k: int, at: int, values: dict[int, np.ndarray] | None) -> None:
+        """Evaluate each state's completion over the chunk's ticks from ``at``."""
+        if self.carries is None:
+            assert self.states is not None  # (the free ticks came first)
+            self.carries = [self._carry(state) for state in self.states]
+            self.values = [math.nan] * len(self.carries)
+        part = {name: np.asarray(col)[at:k] for name, col in columns.items()}
+        fixed = ({self.prog.nodes[j]: values[j][at:k] for j in self.stateful}
+                 if values is not None else None)
+        for j, carry in enumerate(self.carries):
+            v = kleene_values(self.pt, part, {}, k - at, self.start + at, carry,
+                              nan_unknown=self.nan_unknown, fixed=fixed)
+            self.values[j] = float(v[-1])
+
+    def _carry(self, state: tuple[Any, ...]) -> dict:
+        """The state as :func:`kleene_values`' carried state of the temporal operators."""
+        carry: dict = {}
+        for k, value in zip(self.prog.temporal, state):
+            node = self.prog.nodes[k]
+            if node.op in ("O", "H") and node.hi is not None:
+                carry[node] = np.array([_INF if x else -_INF for x in reversed(value)
+                                        if x is not None], np.float64)
+            else:
+                carry[node] = _INF if value else -_INF
+        return carry
+
+    def finish(self) -> bool | None:
+        """True when every completion satisfies the formula at the last tick, False when
+        every one violates it, None when they differ.
+
+        Raises:
+            ValueError: not every tick was fed."""
+        if self.start != self.n:
+            raise ValueError(f"{self.start} of {self.n} ticks fed")
+        finals = set(self.finals)
+        finals.update(v > 0 for v in self.values)
+        return finals.pop() if len(finals) == 1 else None
 
 
-def _stretch(prog: _Program, states: dict[tuple[Any, ...], Any], known: dict[int, bool],
-             free: list[int], i: int, last: bool, finals: set[bool], steps: int) -> int:
-    """Add to ``states`` (those one tick of the gap tick ``i`` leads to, each with its
-    chain) every state further ticks of the gap lead to, each tick any letter of the
-    ``free`` leaves (a gap stands for one tick or more); at the ``last`` tick each of them
-    may end the trace (its root into ``finals``). Returns the work counted so far.
-
-    Raises:
-        TooManyStates: past :data:`MAX_STATES` or :data:`MAX_STEPS`."""
-    frontier = dict(states)
-    later = max(i, 1)  # (the gap's later ticks are not the trace's first)
-    letters = 1 << len(free)
-    while frontier:
-        steps += len(frontier) * letters * prog.cost
-        if len(states) * letters > MAX_STATES:
-            raise TooManyStates(f"{len(states)} states times {letters} letters in the gap "
-                                f"at tick {i} (bound {MAX_STATES})")
-        if steps > MAX_STEPS:
-            raise TooManyStates(f"more than {MAX_STEPS} node evaluations by tick {i}")
-        nxt: dict[tuple[Any, ...], Any] = {}
-        for state, (chain, _i, seq) in frontier.items():
-            for bits in itertools.product((False, True), repeat=len(free)):
-                leaves = dict(known)
-                leaves.update(zip(free, bits))
-                root, after = prog.step(state, leaves, later)
-                if last:
-                    finals.add(root)
-                if after not in states and after not in nxt:
-                    nxt[after] = (chain, i, seq + (dict(zip(free, bits)),))
-        states.update(nxt)
-        frontier = nxt
-    return steps
+#: Kleene's reading at the last tick: true in every completion, may be true, and the last
+#: tick where the formula may be true (None: nowhere)
+Reading = tuple[bool, bool, int | None]
 
 
-def _evaluate_completion(pt: Node, ev: ThreeValued, prog: _Program, chain: Any) -> bool:
-    """The pt formula at the last tick of ``ev`` with the unknown atoms filled as ``chain``
-    says (at its ticks; at a gap tick, a sequence of one letter or more: the ticks it
-    stands for) and every other tick's atoms as read."""
-    filled = {k: ev.pair(prog.nodes[k])[0].copy() for k in prog.leaves}
-    spans: dict[int, tuple[dict[int, bool], ...]] = {}
-    while chain is not None:
-        chain, i, values = chain
-        if isinstance(values, tuple):
-            spans[i] = values
-            continue
-        for k, v in values.items():
-            filled[k][i] = v
-    n = ev.n
-    if spans:  # every gap tick as the ticks its letters fill
-        counts = np.ones(n, np.int64)
-        for i, seq in spans.items():
-            counts[i] = len(seq)
-        at = np.repeat(np.arange(n), counts)
-        starts = np.concatenate(([0], np.cumsum(counts)[:-1]))
-        filled = {k: arr[at] for k, arr in filled.items()}
-        for i, seq in spans.items():
-            for j, letter in enumerate(seq):
-                for k, v in letter.items():
-                    filled[k][starts[i] + j] = v
-        n = len(at)
-    done = ThreeValued(ev.columns, {}, n, ev.nan_unknown)
-    for k, arr in filled.items():
-        done.fix(prog.nodes[k], arr)
-    return bool(done.pair(pt)[0][-1])
-
-
-def pt_verdict(pt: Node, columns: Mapping[str, np.ndarray], unknown: Mapping[str, np.ndarray],
-               n: int, nan_unknown: bool = True, stretch: np.ndarray | None = None
-               ) -> tuple[bool | None, Pair]:
-    """FRET's finite-trace verdict over ``n`` ticks with unknown ticks: True (every way of
-    filling them satisfies), False (every one violates) or None (it depends on them, or
-    the search of :func:`completed_verdict`, which decides where Kleene's reading leaves it
-    open, outgrew its bound); and the pt formula's Kleene ``(lo, hi)`` at every tick
-    (:func:`decide` over the columns). ``stretch``: the gap ticks, each one tick or more
-    (:class:`~fretc.monitors.three_valued.ThreeValued`).
-
-    Raises:
-        VectorizeError: the pt formula cannot be evaluated over columns.
-    """
-    holds, pair, _why = decide(pt, ThreeValued(columns, unknown, n, nan_unknown, stretch))
-    return holds, pair
-
-
-def decide(pt: Node, ev: ThreeValued) -> tuple[bool | None, Pair, str]:
-    """The verdict of :func:`pt_verdict` over the ticks of ``ev``: Kleene's reading of the pt
-    formula at the last tick, then, where it is open, the exact search over completions.
+def decide(pt: Node, columns: Mapping[str, np.ndarray], unknown: Mapping[str, np.ndarray],
+           n: int, nan_unknown: bool = True, stretch: np.ndarray | None = None
+           ) -> tuple[bool | None, Reading, str]:
+    """FRET's finite-trace verdict over a whole trace of ``n >= 1`` ticks with unknown ticks:
+    Kleene's reading of the pt formula at the last tick
+    (:class:`fretc.monitors.three_valued.KleeneStream`), then, where it is open, every
+    completion (:class:`CompletionsStream`), each fed the trace as one chunk (``columns``,
+    ``unknown``, ``nan_unknown`` and ``stretch``, the gap ticks, as
+    :class:`~fretc.monitors.three_valued.Kleene` takes them).
 
     Returns:
-        ``(holds, (lo, hi), why)``: ``holds`` True, False or None; the pt formula's Kleene
-        pair at every tick; ``why`` empty, or why the search stopped before it decided
-        (:class:`TooManyStates`' message; ``holds`` is then None).
+        ``(holds, reading, why)``: ``holds`` True (every completion satisfies), False (every
+        one violates) or None (they differ, or the search outgrew its bounds); Kleene's
+        reading at the last tick (:data:`Reading`); ``why`` empty, or why the search
+        stopped before it decided (:class:`TooManyStates`' message; ``holds`` is then None).
 
     Raises:
-        VectorizeError: the pt formula cannot be evaluated over the columns of ``ev``.
+        VectorizeError: the pt formula cannot be evaluated over the columns.
     """
-    lo, hi = ev.pair(pt)
-    if lo[-1]:
-        return True, (lo, hi), ""
-    if not hi[-1]:
-        return False, (lo, hi), ""
+    kleene = KleeneStream(pt, nan_unknown, whole=True)
+    kleene.feed(columns, unknown, n, stretch)
+    reading = kleene.finish()
+    lo, hi, _last_hi = reading
+    if lo or not hi:
+        return lo, reading, ""
+    if kleene.free is None:  # (no leaf unknown: Kleene's reading is the verdict)
+        return False, reading, ""
+    run = CompletionsStream(pt, *kleene.free, n, nan_unknown)
     try:
-        return completed_verdict(pt, ev), (lo, hi), ""
+        run.feed(columns, unknown, n, stretch)
     except TooManyStates as exc:
-        return None, (lo, hi), str(exc)
+        return None, reading, str(exc)
+    return run.finish(), reading, ""

@@ -1,12 +1,12 @@
-"""FRET's interval semantics over a trace with unknown ticks (a comparison reading NaN, an
-unknown value), fed a chunk of ticks at a time: the evidence the three-valued judge shows
-(:func:`fretc.monitors.judge3.definite_evidence` of
-:func:`fretc.monitors.interval.evaluate_requirement` with ``favour``), in memory that does
-not grow with the trace's ticks.
+"""FRET's interval semantics over a trace with unknown ticks (a gap in the log, a comparison
+reading NaN, an unknown value), fed a chunk of ticks at a time: the evidence the three-valued
+judge shows, only what lies in the ticks read (../shared/DESIGN.md, "Damage is a gap: never
+evidence, never the end"), in memory that does not grow with the trace's ticks
+(:class:`DefiniteStream`); a whole trace is one chunk (:func:`definite_evidence`).
 
-:class:`DefiniteStream` feeds an :class:`~fretc.monitors.interval.IntervalStream`
-each chunk's signals with their unknown ticks set to meet the obligation (``favour``), so it
-lists the failed triggers the known ticks make, in the whole-trace order. Alongside it:
+:class:`DefiniteStream` feeds an :class:`~fretc.monitors.interval.IntervalStream` each chunk's
+signals with their unknown ticks set to meet the obligation (``favour``), so it lists the
+failed triggers the known ticks make, in trigger order. Alongside it:
 
 * **the definite triggers** are counted as each chunk's trigger points pass (the
   stream's ``on_triggers``): a trigger is definite when the scope mode is known over the
@@ -15,10 +15,16 @@ lists the failed triggers the known ticks make, in the whole-trace order. Alongs
   range ends at the trigger, so the ticks read so far decide it). Where the condition is
   known at a tick and the tick before, its favoured value is its value, so the stream's
   trigger points are the trace's there;
-* **the unknown ticks of each part** (scope mode, condition, response, stop condition) are
-  kept as runs of ticks, so that at the end each listed failed trigger is kept only when
-  its interval's bounds, its trigger and its missed obligation are known
-  (:class:`~fretc.monitors.unknowns.Unknowns`' own tests, asked of the runs).
+* **the unknown ticks of each part** (scope mode, condition, response, stop condition) and
+  the gap ticks (each one tick or more, how many not known) are kept as runs of ticks, so
+  that at the end each listed failed trigger is kept only when its interval's bounds, its
+  trigger and its missed obligation are known in every completion and every count of the
+  gaps' ticks (:class:`~fretc.monitors.unknowns.Unknowns`' own tests, asked of the runs: a
+  ``for`` obligation missed across a gap tick may lie past the duration).
+
+Its ``holds`` and ``vacuous`` are the caller's: the three-valued verdict decides them
+(:mod:`fretc.monitors.completions`); a requirement that holds with no definite trigger is
+vacuous.
 
 Memory: the interval stream's, and two ticks per run of unknown ticks: at most
 :data:`MAX_RUNS` runs a part (past them the stream says :attr:`DefiniteStream.too_many`, and
@@ -36,7 +42,7 @@ from fretc.monitors.interval import Evidence
 from fretc.monitors.interval import IntervalStream
 from fretc.monitors.unknowns import Unknowns
 
-__all__ = ["DefiniteStream", "MAX_RUNS"]
+__all__ = ["DefiniteStream", "MAX_RUNS", "definite_evidence"]
 
 #: The most runs of unknown ticks kept per part of a requirement (two int64 each: 16 MB at
 #: most; a NaN in every tenth row of 10^7 rows is 10^6 runs)
@@ -118,8 +124,11 @@ class DefiniteStream:
     (module docstring).
 
     Args:
-        req: a requirement :func:`fretc.monitors.interval.stream_unsupported` takes.
+        req: a parsed, not free-form requirement (one with a temporal function is fed the
+            whole trace as one chunk, as :class:`~fretc.monitors.interval.IntervalStream`).
         duration_ticks: as :class:`~fretc.monitors.interval.IntervalStream`'s.
+        nan_unknown: a comparison with NaN is unknown (fretc's NaN rule); False under
+            ``[tick] nan = "false"``.
 
     Raises:
         EvidenceUnsupported: as :class:`~fretc.monitors.interval.IntervalStream`.
@@ -131,12 +140,13 @@ class DefiniteStream:
             condition unknown somewhere: :func:`fretc.monitors.unknowns.possible_trigger`).
     """
 
-    def __init__(self, req: A.Requirement, duration_ticks: int | None) -> None:
-        self.req = req
+    def __init__(self, req: A.Requirement, duration_ticks: int | None,
+                 nan_unknown: bool = True) -> None:
+        self.req, self.nan_unknown = req, nan_unknown
         self.interval = IntervalStream(req, duration_ticks)
         self.interval.on_triggers = self._triggers
         self.scope, self.cond = req.scope.kind, req.condition.kind
-        self.runs = {part: _Runs() for part in "MCRS"}
+        self.runs = {part: _Runs() for part in "MCRSG"}  # (G: the gap ticks)
         self.n = 0
         self.too_many = False
         self.possible_trigger = False
@@ -148,17 +158,19 @@ class DefiniteStream:
         self._u: Unknowns | None = None  # the chunk's
 
     def feed(self, columns: Mapping[str, np.ndarray], unknown: Mapping[str, np.ndarray],
-             k: int, times: np.ndarray) -> None:
+             k: int, times: np.ndarray, stretch: np.ndarray | None = None) -> None:
         """The next ``k >= 0`` ticks: ``columns`` as the interval stream takes them,
         ``unknown`` variable -> bool array of ``k`` (its unknown ticks; a comparison with
-        NaN is unknown, fretc's NaN rule), ``times`` int64 ns."""
+        NaN is unknown under fretc's NaN rule), ``times`` int64 ns, ``stretch`` the gap ticks
+        (bool array of ``k``, their variables unknown in ``unknown`` too; None: none)."""
         if k <= 0:
             return
         cols = {name: np.asarray(c)[:k] for name, c in columns.items()}
-        u = Unknowns.of(self.req, unknown, cols, k, True)
-        for part in "MCRS":
+        u = Unknowns.of(self.req, unknown, cols, k, self.nan_unknown)
+        gaps = np.zeros(k, np.bool_) if stretch is None else np.asarray(stretch[:k], np.bool_)
+        for part, mask in zip("MCRSG", (u.M, u.C, u.R, u.S, gaps)):
             runs = self.runs[part]
-            runs.add(getattr(u, part), self.n)
+            runs.add(mask, self.n)
             self.too_many = self.too_many or runs.count > MAX_RUNS
         if self._m_first is None and u.M.any():
             self._m_first = self.n + int(np.argmax(u.M))
@@ -211,6 +223,8 @@ class DefiniteStream:
             ValueError: no tick was fed."""
         ev, times = self.interval.finish()
         u = Unknowns(self.n, *(self.runs[p].mask() for p in "MCRS"))  # type: ignore[arg-type]
+        if self.runs["G"].count:
+            u.stretch = self.runs["G"].mask()  # type: ignore[assignment]  # (read as a mask)
         negate = self.scope.startswith("only")
         listed = [w for w in ev.listed
                   if u.scope_known(w.interval[0], w.interval[1], self.scope)
@@ -226,3 +240,20 @@ class DefiniteStream:
                         violation=listed[0] if listed else None, ticks=ev.ticks,
                         first_interval=ev.first_interval, first_trigger=first,
                         listed=listed), times
+
+
+def definite_evidence(req: A.Requirement, columns: Mapping[str, np.ndarray],
+                      unknown: Mapping[str, np.ndarray], n: int, duration_ticks: int | None,
+                      nan_unknown: bool = True, stretch: np.ndarray | None = None
+                      ) -> tuple[Evidence, bool]:
+    """The definite evidence of ``req`` over a whole trace of ``n >= 1`` ticks (a
+    :class:`DefiniteStream` fed it as one chunk; arguments as its), and whether a trigger
+    may have fired in unknown ticks.
+
+    Raises:
+        EvidenceUnsupported: as :class:`~fretc.monitors.interval.IntervalStream`.
+        KeyError: a variable missing from ``columns``.
+        ValueError: ``n < 1``."""
+    s = DefiniteStream(req, duration_ticks, nan_unknown)
+    s.feed(columns, unknown, n, np.arange(n, dtype=np.int64), stretch)
+    return s.finish()[0], s.possible_trigger

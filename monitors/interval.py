@@ -381,7 +381,7 @@ class IntervalStream:
         #: called with each chunk's trigger points (the trace's tick of the chunk's first,
         #: the local trigger ticks, the local interval starts, the start of the interval
         #: open before the chunk or None, the chunk's times): the definite triggers of
-        #: :class:`fretc.monitors.definite_stream.DefiniteStream`
+        #: :class:`fretc.monitors.definite.DefiniteStream`
         self.on_triggers: Callable[..., None] | None = None
 
     def feed(self, columns: Mapping[str, np.ndarray], k: int, times: np.ndarray,

@@ -1,22 +1,23 @@
-"""The offline judge over a trace with unknown ticks (a gap in the log, a comparison with
-NaN): the verdict every way of filling them agrees on, and evidence that lies in the ticks
-read (../shared/DESIGN.md, "Damage is a gap: never evidence, never the end").
+"""The offline judge over a whole trace with unknown ticks (a gap in the log, a comparison with
+NaN, a gap tick standing for one tick or more): the verdict every way of filling them agrees
+on, and evidence that lies in the ticks read (../shared/DESIGN.md, "Damage is a gap: never
+evidence, never the end"), from the three-valued streams each fed the trace as one chunk
+(:func:`judge_three`).
 
 * **The verdict** is FRET's finite-trace verdict three-valued (:func:`fretc.monitors.
-  completions.pt_verdict`): violated when every completion of the unknown ticks violates
-  the requirement, satisfied when every one satisfies it, unknown otherwise. An invariant
-  broken at a tick read is violated, whatever a gap elsewhere held; one that held on every
-  tick read but has unknown ticks is unknown.
-* **The evidence** of a violation is FRET's interval semantics
-  (:func:`fretc.monitors.interval.evaluate_requirement`) over the ticks as sampled, keeping
-  only the failed triggers that are *definite*: their scope interval's bounds, the trigger
-  and the response (and stop condition) from the trigger to the tick the obligation was
-  missed are all known. Where none is, the evidence is the tick from which the pt formula is
-  false in every completion.
-* **Triggers** counted are the definite ones (the trigger and the part of its scope
-  interval up to it known: the interval's end does not make a trigger); a requirement that holds in every completion
-  with no definite trigger is vacuous (a note says when a trigger may have fired in unknown
-  ticks).
+  completions.decide`: Kleene's reading, then every completion where it is open): violated
+  when every completion of the unknown ticks violates the requirement, satisfied when every
+  one satisfies it, unknown otherwise. An invariant broken at a tick read is violated,
+  whatever a gap elsewhere held; one that held on every tick read but has unknown ticks is
+  unknown.
+* **The LTL3 verdict** runs the monitor automata over every letter an unknown tick may be
+  (:func:`fretc.monitors.three_valued.ltl3_verdict`).
+* **The evidence** of a violation is FRET's interval semantics over the ticks as sampled,
+  keeping only the failed triggers that are *definite* (:mod:`fretc.monitors.definite`);
+  where none is, the evidence is the tick from which the pt formula is false in every
+  completion.
+* **Triggers** counted are the definite ones; a requirement that holds in every completion
+  with no definite trigger is vacuous.
 
 Where the parts of a requirement are unknown is :mod:`fretc.monitors.unknowns`'s.
 """
@@ -24,16 +25,81 @@ Where the parts of a requirement are unknown is :mod:`fretc.monitors.unknowns`'s
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping
-from typing import Any
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from fretc.compiler.ir import Node
 from fretc.fretish import ast as A
-from fretc.monitors.interval import Evidence, Violation, every_trigger
-from fretc.monitors.unknowns import Unknowns
+from fretc.monitors.completions import Reading, decide
+from fretc.monitors.definite import definite_evidence
+from fretc.monitors.interval import Evidence, EvidenceUnsupported, verdict_of
+from fretc.monitors.judge import nan_ticks
+from fretc.monitors.three_valued import ltl3_verdict
+from fretc.monitors.vectorized import VectorizeError
 
-__all__ = ["definite_evidence", "verdict_under_nan", "nan_rule_judge"]
+if TYPE_CHECKING:
+    from fretc.compiler.codegen import MonitorSource
+    from fretc.compiler.semantics import Formalization
+
+__all__ = ["ThreeJudgement", "judge_three", "verdict_under_nan", "nan_rule_judge"]
+
+
+@dataclass
+class ThreeJudgement:
+    """What :func:`judge_three` decided about one requirement over a trace with unknown
+    ticks.
+
+    Attributes:
+        holds: True (every completion satisfies it), False (every one violates it), None
+            (they differ, or the search outgrew its bounds: ``why``).
+        reading: Kleene's reading of the pt formula at the last tick
+            (:data:`fretc.monitors.completions.Reading`); ``completed``: the verdict was
+            decided by following every completion (Kleene's reading left it open).
+        ltl3: the three-valued LTL3 verdict and its tick.
+        evidence: the definite evidence (None where the interval semantics cannot take the
+            requirement); ``possible_trigger``: a trigger may have fired in unknown ticks.
+    """
+
+    holds: bool | None
+    reading: Reading
+    why: str
+    ltl3: tuple[str, int | None]
+    evidence: Evidence | None
+    possible_trigger: bool
+
+    @property
+    def completed(self) -> bool:
+        """The verdict was decided by following every completion."""
+        return self.holds is not None and not self.reading[0] and self.reading[1]
+
+
+def judge_three(requirement: A.Requirement, formalization: Formalization,
+                columns: Mapping[str, np.ndarray], unknown: Mapping[str, np.ndarray], n: int,
+                *, nan_unknown: bool = True, stretch: np.ndarray | None = None,
+                monitor_source: MonitorSource | None = None, evidence: bool = True
+                ) -> ThreeJudgement:
+    """Judge ``requirement`` over a whole trace of ``n >= 1`` ticks whose variables are
+    unknown at ``unknown`` (variable -> bool array of ``n``) and whose gap ticks are
+    ``stretch`` (module docstring); ``monitor_source``: its LTL3 automata (None: no online
+    monitor, LTL3 ``"unknown"``); ``evidence``: make the definite evidence.
+
+    Raises:
+        VectorizeError: the pt formula cannot be evaluated over the columns.
+    """
+    holds, reading, why = decide(formalization.pt, columns, unknown, n, nan_unknown, stretch)
+    ltl3: tuple[str, int | None] = ("unknown", None)
+    if monitor_source is not None:
+        try:
+            ltl3 = ltl3_verdict(monitor_source, columns, unknown, n, nan_unknown, stretch)
+        except VectorizeError:
+            pass
+    ev, possible = None, False
+    if evidence:
+        ev, possible = definite_evidence(requirement, columns, unknown, n,
+                                         formalization.ticks, nan_unknown, stretch)
+    return ThreeJudgement(holds, reading, why, ltl3, ev, possible)
 
 
 def nan_rule_judge(compiled: Any) -> Callable[..., str]:
@@ -66,53 +132,15 @@ def verdict_under_nan(req: A.Requirement, pt: Node | None, columns: Mapping[str,
     ``"unknown"`` too when the interval semantics cannot evaluate ``req``, or it reads NaN
     and has no pt formula or one past the completions' bounds. What ``fretc testgen``
     writes as a test's expected verdict, so that it is the audit's."""
-    from fretc.monitors.completions import decide
-    from fretc.monitors.interval import EvidenceUnsupported, evaluate_requirement, verdict_of
-    from fretc.monitors.judge import nan_ticks
-    from fretc.monitors.three_valued import ThreeValued
-    from fretc.monitors.vectorized import VectorizeError
-
     if not nan_ticks(req, columns, n).any():
         return verdict_of(req, columns, n, duration_ticks)
     if pt is None:
         return "unknown"
     try:
-        holds, _pair, _why = decide(pt, ThreeValued(columns, {}, n, True))
+        holds, _reading, _why = decide(pt, columns, {}, n)
         if holds is not True:
             return "violated" if holds is False else "unknown"
-        parts = Unknowns.of(req, {}, columns, n, True)
-        ev = evaluate_requirement(req, columns, n, duration_ticks, favour=parts)
+        ev, _possible = definite_evidence(req, columns, {}, n, duration_ticks)
     except (EvidenceUnsupported, VectorizeError):
         return "unknown"
-    return "vacuous" if definite_evidence(req, ev, parts, columns).triggers == 0 \
-        else "satisfied"
-
-
-def definite_evidence(req: A.Requirement, ev: Evidence, u: Unknowns,
-                      columns: Mapping[str, np.ndarray]) -> Evidence:
-    """``ev`` (the interval semantics over the ticks as sampled) with only the definite
-    failed triggers listed and counted, and the definite triggers counted (module
-    docstring). Its ``holds`` and ``vacuous`` are left to the caller (the three-valued
-    verdict decides them)."""
-    scope, cond = req.scope.kind, req.condition.kind
-    negate = scope.startswith("only")
-    listed: list[Violation] = []
-    for w in ev.listed:
-        s, e = w.interval
-        if (u.scope_known(s, e, scope) and u.trigger_known(w.trigger_tick, s, cond)
-                and u.missed_known(w.trigger_tick, w.window[0], w.violation_tick,
-                                   req.timing.kind, negate)):
-            listed.append(w)
-    triggers = 0
-    first_trigger = None
-    got = every_trigger(req, columns, u.n, 0)
-    for (s, _e), points in zip(got.intervals, got.triggers):
-        for t in points:
-            if u.in_scope_known(t, s, scope) and u.trigger_known(t, s, cond):
-                triggers += 1
-                first_trigger = t if first_trigger is None else first_trigger
-    return Evidence(holds=ev.holds, vacuous=ev.vacuous, intervals=ev.intervals,
-                    triggers=triggers, violations=len(listed),
-                    violation=listed[0] if listed else None, ticks=ev.ticks,
-                    first_interval=ev.first_interval, first_trigger=first_trigger,
-                    listed=listed)
+    return "vacuous" if ev.triggers == 0 else "satisfied"

@@ -43,7 +43,7 @@ from __future__ import annotations
 
 import math
 from typing import Any
-from collections.abc import Iterator, Mapping
+from collections.abc import Hashable, Iterator, Mapping
 from dataclasses import dataclass
 
 import numpy as np
@@ -635,13 +635,13 @@ class _Rho:
         truth = node_series(node, self.columns, n)
         return np.where(truth, _INF, -_INF)
 
-    def _carried(self, node: Node, initial):
+    def _carried(self, node: Hashable, initial):
         """The state ``node`` carried from the chunk before (``initial`` at the start)."""
         if self.carry is None or node not in self.carry:
             return initial
         return self.carry[node]
 
-    def _keep(self, node: Node, state) -> None:
+    def _keep(self, node: Hashable, state) -> None:
         if self.carry is not None:
             self.carry[node] = state
 
@@ -676,7 +676,16 @@ class _Rho:
                 out = pick(out, before)
             self._keep(node, float(out[-1]))
             return out
+        return self._bounded(node, x)
+
+    def _bounded(self, node: Node, x: np.ndarray) -> np.ndarray:
+        """``O[lo,hi]`` / ``H[lo,hi]`` of the operand's values ``x``: the max / min over the
+        window ``[i-hi, i-lo]`` (``-inf`` / ``+inf`` where it is empty), the last ``hi``
+        values carried to the next chunk."""
+        is_once = node.op == "O"
+        pick = np.maximum if is_once else np.minimum
         lo, hi = node.lo or 0, node.hi
+        assert hi is not None  # (a bounded operator)
         tail = self._carried(node, x[:0])  # the last ``hi`` ticks before, where they exist
         if len(tail):
             x = np.concatenate((tail, x))

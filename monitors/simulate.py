@@ -242,13 +242,13 @@ def _three_valued(f, trace: dict[str, list[Any]], nan: np.ndarray, rows: list[di
     """``(ft, pt)`` of a trace with NaN values: True or False where every value the NaN
     could stand for gives it, None (unknown) where it depends on them, as the audit judges
     a NaN (docs/guide/ticks.md, "NaN"; :mod:`fretc.monitors.three_valued`, Kleene's
-    three-valued logic, and :mod:`fretc.monitors.completions` where it leaves a verdict
-    open). ``pt`` at tick i is the pt formula's pair at i; ``ft`` at i is the
+    three-valued logic, and :func:`fretc.monitors.completions.decide` where it leaves a
+    verdict open). ``pt`` at tick i is the pt formula's reading at i; ``ft`` at i is the
     pt formula's at the last tick of the trace from i (FRET's ft verdict of a trace is its pt
     formula at the last tick: tests/semantics); both exact where no NaN is read. A pt formula
     with a future-time function inside is unknown wherever a NaN is in the trace."""
-    from fretc.monitors.completions import pt_verdict
-    from fretc.monitors.three_valued import ThreeValued
+    from fretc.monitors.completions import decide
+    from fretc.monitors.three_valued import kleene_values
     from fretc.monitors.vectorized import VectorizeError
 
     n = len(nan)
@@ -256,13 +256,14 @@ def _three_valued(f, trace: dict[str, list[Any]], nan: np.ndarray, rows: list[di
                           else np.float64) for v in f.variables}
 
     def at_last(a: int, b: int) -> bool | None:  # the verdict over ticks a..b-1
-        return pt_verdict(f.pt, {v: c[a:b] for v, c in cols.items()}, {}, b - a)[0]
+        return decide(f.pt, {v: c[a:b] for v, c in cols.items()}, {}, b - a)[0]
 
     last_nan = int(np.flatnonzero(nan)[-1])
     try:
         if not f.pt_causal:
             raise VectorizeError("a future-time function inside the pt formula")
-        lo, hi = ThreeValued(cols, {}, n).pair(f.pt)
+        values = kleene_values(f.pt, cols, {}, n, 0, {})
+        lo, hi = values > 0, values >= 0
         pt = [bool(a) if a or not b else at_last(0, i + 1)
               for i, (a, b) in enumerate(zip(lo.tolist(), hi.tolist()))]
         ft: list[bool | None] = []
@@ -302,15 +303,16 @@ def _parts(req, trace: dict[str, list[Any]], n: int) -> dict[str, list[Any]]:
 def _part_three_valued(e, cols: dict[str, np.ndarray], n: int, known: list) -> list:
     """A part's values where NaN values are read: True or False where every value a NaN
     could stand for gives it, None where it depends on them (Kleene's three-valued logic,
-    :class:`fretc.monitors.three_valued.ThreeValued`, on the part's pt expansion); a part
+    :func:`fretc.monitors.three_valued.kleene_values`, on the part's pt expansion); a part
     that cannot be evaluated so is None from the first NaN on."""
     from fretc.compiler import ir
     from fretc.compiler.expressions import Expander
-    from fretc.monitors.three_valued import ThreeValued
+    from fretc.monitors.three_valued import kleene_values
 
     try:
-        lo, hi = ThreeValued(cols, {}, n).pair(Expander("pt", ir.FTP, ir.LAST,
-                                                        free=True).bool(e))
+        values = kleene_values(Expander("pt", ir.FTP, ir.LAST, free=True).bool(e), cols, {},
+                               n, 0, {})
+        lo, hi = values > 0, values >= 0
     except Exception:  # a future-time function, a call the columns cannot evaluate
         nan = np.zeros(n, np.bool_)
         for c in cols.values():

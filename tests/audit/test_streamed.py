@@ -192,21 +192,18 @@ def check_trace(tmp_path_factory, n: int, timed: bool, marks: str, rows: int, ch
     streamed_ids = _ids(plan, decided["results"])
     assert not streamed_ids & WHOLE
     if marks in ("", "nan", "unknown", "both", "gap") and chunk >= 3:
-        # a clean trace, or one whose NaN and unknown cells the three-valued streams take:
-        # every requirement but WHOLE streamed (a robustness chunk shorter than a bounded
-        # window, R14's 3 ticks, is refused); on one with a gap row none (the whole-trace
-        # judge reads a gap row as every count of ticks)
-        gapped = {r.id for r in plan.requirements} \
-            if marks == "gap" and "gap," in path.read_text() else set()
-        assert streamed_ids == {r.id for r in plan.requirements} - WHOLE - gapped, \
-            decided["whole"]
+        # a clean trace, or one whose NaN, unknown cells and gap rows the three-valued
+        # streams take (a gap row as a gap tick, one tick or more): every requirement but
+        # WHOLE streamed (a robustness chunk shorter than a bounded window, R14's 3 ticks,
+        # is refused)
+        assert streamed_ids == {r.id for r in plan.requirements} - WHOLE, decided["whole"]
 
 
 @pytest.mark.tor("TOR-LOG-003")
 def test_what_sends_a_requirement_back_to_the_whole_trace_judge(plan, tmp_path):
     """A NaN read by a comparison sends the requirements comparing ``x`` (only them) to the
-    three-valued streams (audit/streamed_three.py), which decide them here, and an
-    ``unknown`` cell those reading its column; a ``gap`` row (one tick or more) or a ``cut``
+    three-valued streams (audit/streamed_three.py), which decide them here, an ``unknown``
+    cell those reading its column, and a ``gap`` row (one tick or more) every one; a ``cut``
     row sends every one back to the whole-trace judge. The JSON is the whole-trace judge's
     in each case."""
     rows = ["time,x,p,q,m"] + [f"{i / 10:.1f},1.5,{i % 3 == 0:d},{i % 4 == 0:d},{i % 7 < 3:d}"
@@ -242,8 +239,8 @@ def test_what_sends_a_requirement_back_to_the_whole_trace_judge(plan, tmp_path):
     assert not back and ok == set(_ids(plan, range(99))) - WHOLE
     assert three["unknown"] == reading_q
     ok, back = run("gap", lambda lines: lines.insert(12, "1.05,gap,gap,gap,gap"))
-    assert not ok and back == set(_ids(plan, range(99))) - WHOLE
-    assert not three.get("gap")
+    assert not back and ok == set(_ids(plan, range(99))) - WHOLE
+    assert three["gap"] == ok
     ok, back = run("cut", lambda lines: lines.append("3.0,cut,cut,cut,cut"))
     assert not ok and back == set(_ids(plan, range(99))) - WHOLE
     assert not three.get("cut")
@@ -346,13 +343,13 @@ def test_a_requirement_alone_is_judged_as_in_the_set(plan, tmp_path, marks):
 def test_more_runs_of_unknown_ticks_than_kept_go_back_to_the_whole_trace_judge(plan, tmp_path):
     """Past MAX_RUNS runs of unknown ticks in a part, the three-valued streams give the
     requirement up, and the judge holding its columns decides it: the same JSON."""
-    import fretc.monitors.definite_stream as definite_stream
+    import fretc.monitors.definite as definite
 
     rows = ["time,x,p,q,m"] + [f"{i / 10:.1f},{'nan' if i % 4 == 1 else '1.5'},{i % 3 == 0:d},"
                                f"{i % 4 == 0:d},{i % 7 < 3:d}" for i in range(40)]
     path = tmp_path / "runs.csv"
     path.write_text("\n".join(rows) + "\n", encoding="utf-8")
-    got, whole, decided = _both(plan, str(path), {(definite_stream, "MAX_RUNS"): 3})
+    got, whole, decided = _both(plan, str(path), {(definite, "MAX_RUNS"): 3})
     assert got == whole
     back = {rid for rid, why in ((r.id, decided["whole"].get(r.index))
                                  for r in plan.requirements) if why}

@@ -1,9 +1,10 @@
-"""monitors.definite_stream.DefiniteStream against the three-valued judge's evidence over the
-whole trace (judge3.definite_evidence of evaluate_requirement with favour): on random
-sentences of tests/differential.py's generator (every scope, condition and timing), random
-traces with NaN operands and unknown values anywhere, split into random chunks, the evidence
-(definite triggers and first trigger, the definite failed triggers listed) and the times of
-the ticks it names are equal."""
+"""monitors.definite.DefiniteStream at every chunk boundary: on random sentences of
+tests/differential.py's generator (every scope, condition and timing), random traces with NaN
+operands, unknown values and gap ticks anywhere, split into random chunks, the evidence
+(definite triggers and first trigger, the definite failed triggers listed), the times of the
+ticks it names and whether a trigger may have fired in unknown ticks are those of the whole
+trace fed as one chunk (definite_evidence). What the whole trace's must be is tested against
+every completion (test_three_valued.py, test_gap_ticks.py)."""
 
 from __future__ import annotations
 
@@ -16,18 +17,16 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from fretc.fretish import parse
-from fretc.monitors.definite_stream import DefiniteStream, _RunMask, _Runs
-from fretc.monitors.interval import evaluate_requirement
+from fretc.monitors.definite import DefiniteStream, _RunMask, _Runs, definite_evidence
 from fretc.monitors.interval import stream_unsupported
-from fretc.monitors.judge3 import definite_evidence
-from fretc.monitors.unknowns import Unknowns, possible_trigger
 
 from differential import BOOL_VARS, MODE_VARS, NUM_VARS, random_requirement
 from test_interval_stream import BOOL_TYPES, SIZES, named_ticks, time_of
 
 
-def _columns(rnd: random.Random, n: int) -> tuple[dict, dict]:
-    """Columns (runs of booleans, NaN among the numbers) and unknown masks."""
+def _columns(rnd: random.Random, n: int) -> tuple[dict, dict, np.ndarray | None]:
+    """Columns (runs of booleans, NaN among the numbers), unknown masks and gap ticks (None
+    without; every variable unknown there)."""
     cols: dict = {}
     for v in BOOL_VARS + MODE_VARS:
         flips = np.array([rnd.random() < rnd.choice([0.1, 0.5]) for _ in range(n)])
@@ -37,16 +36,20 @@ def _columns(rnd: random.Random, n: int) -> tuple[dict, dict]:
                             for _ in range(n)])
     unknown = {v: np.array([rnd.random() < 0.08 for _ in range(n)], np.bool_)
                for v in BOOL_VARS + MODE_VARS if rnd.random() < 0.3}
-    return cols, unknown
+    stretch = None
+    if rnd.random() < 0.4:
+        stretch = np.array([rnd.random() < 0.05 for _ in range(n)], np.bool_)
+        for v in cols:
+            unknown[v] = unknown.get(v, np.zeros(n, np.bool_)) | stretch
+    return cols, unknown, stretch
 
 
 def _check(text: str, rnd: random.Random, n: int) -> None:
     req = parse(text)
     if stream_unsupported(req) is not None:
         return
-    cols, unknown = _columns(rnd, n)
-    u = Unknowns.of(req, unknown, cols, n, True)
-    want = definite_evidence(req, evaluate_requirement(req, cols, n, None, favour=u), u, cols)
+    cols, unknown, stretch = _columns(rnd, n)
+    want, possible = definite_evidence(req, cols, unknown, n, None, True, stretch)
     s = DefiniteStream(req, None)
     times = time_of(np.arange(n, dtype=np.int64))
     i = 0
@@ -58,19 +61,20 @@ def _check(text: str, rnd: random.Random, n: int) -> None:
             if part.dtype == np.bool_:
                 part = part.astype(rnd.choice(BOOL_TYPES))
             chunk[name] = part
-        s.feed(chunk, {v: m[i:i + k] for v, m in unknown.items()}, k, times[i:i + k])
+        s.feed(chunk, {v: m[i:i + k] for v, m in unknown.items()}, k, times[i:i + k],
+               None if stretch is None else stretch[i:i + k])
         i += k
     got, got_times = s.finish()
     assert got == want, f"{text}\n stream {got}\n whole  {want}"
     assert {t: got_times[t] for t in named_ticks(want)} == \
         {t: time_of(t) for t in named_ticks(want)}, text
-    assert s.possible_trigger == possible_trigger(u), text
+    assert s.possible_trigger == possible, text
 
 
 @settings(max_examples=300, deadline=None)
 @given(st.integers(0, 2**32 - 1), st.integers(1, 60))
 @pytest.mark.tor("TOR-LOG-003")
-def test_the_definite_stream_is_the_three_valued_evidence(seed, n):
+def test_the_definite_evidence_in_chunks_is_that_of_one_chunk(seed, n):
     rnd = random.Random(seed)
     text, _ = random_requirement(rnd, depth=1)
     _check(text, rnd, n)

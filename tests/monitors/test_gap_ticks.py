@@ -19,13 +19,14 @@ from fretc.audit.trials import trigger_outcomes
 from fretc.compiler.build import compile_entries
 from fretc.compiler.codegen import monitor_source
 from fretc.fretish import load_requirements
-from fretc.monitors.completions import pt_verdict
+from fretc.compiler import ir
+from fretc.monitors.completions import decide
+from fretc.monitors.definite import definite_evidence
 from fretc.monitors.interval import evaluate_requirement
 from fretc.monitors.judge import ltl3_verdict as ltl3_two
-from fretc.monitors.judge3 import definite_evidence
-from fretc.monitors.three_valued import ThreeValued, ltl3_verdict, stretched_window
+from fretc.monitors.three_valued import kleene_values, ltl3_verdict, stretched_window
 from fretc.monitors.unknowns import Unknowns
-from fretc.monitors.vectorized import pt_series
+from fretc.monitors.vectorized import node_series, pt_series
 
 #: scopes, conditions and timings: each counts ticks in its own way
 SENTENCES = [
@@ -115,11 +116,10 @@ def _check(text, rows, holes, gap_at):
     stretch[gaps] = True
     for v in cols:  # a gap tick: every variable unknown
         unknown.setdefault(v, np.zeros(n, np.bool_))[gaps] = True
-    got, _pair = pt_verdict(f.pt, cols, unknown, n, True, stretch)
-    status, _tick = ltl3_verdict(ms, ThreeValued(cols, unknown, n, True, stretch))
+    got, _reading, _why = decide(f.pt, cols, unknown, n, True, stretch)
+    status, _tick = ltl3_verdict(ms, cols, unknown, n, True, stretch)
     u = Unknowns.of(req, unknown, cols, n, True, stretch)
-    ev = evaluate_requirement(req, cols, n, f.ticks, favour=u)
-    counted = definite_evidence(req, ev, u, cols)
+    counted, _possible = definite_evidence(req, cols, unknown, n, f.ticks, True, stretch)
     decided = {t: kind for t, kind in trigger_outcomes(req, cols, n, f.ticks, u)
                if kind in ("satisfied", "violated")}
     outcomes, statuses = set(), set()
@@ -210,3 +210,48 @@ def test_a_window_over_gap_ticks_is_what_every_count_gives(lo, span, once, value
     for i in range(n):
         assert not got_lo[i] or seen[i] == {True}, (i, values, gaps, lo, hi, once)
         assert got_hi[i] or seen[i] == {False}, (i, values, gaps, lo, hi, once)
+
+
+_ATOMS = st.one_of(st.sampled_from("pqm").map(ir.ap), st.just(ir.Node("FTP")),
+                   st.sampled_from(["<", ">="]).map(lambda op: ir.cmp(op, ir.var("x"),
+                                                                         ir.num("1"))))
+_PAST = st.recursive(_ATOMS, lambda sub: st.one_of(
+    sub.map(ir.Y), sub.map(ir.Z), sub.map(ir.not_), sub.map(ir.O), sub.map(ir.H),
+    st.tuples(sub, st.integers(0, 2), st.integers(0, 2)).map(
+        lambda a: ir.O(a[0], a[1], a[1] + a[2])),
+    st.tuples(sub, st.integers(0, 2), st.integers(0, 2)).map(
+        lambda a: ir.H(a[0], a[1], a[1] + a[2])),
+    st.tuples(sub, sub).map(lambda a: ir.S(*a)), st.tuples(sub, sub).map(lambda a: ir.T(*a)),
+    st.tuples(sub, sub).map(lambda a: ir.and_(*a))), max_leaves=4)
+
+
+@settings(max_examples=200, deadline=None)
+@given(node=_PAST, rows=st.lists(_row, min_size=1, max_size=5),
+       holes=st.lists(st.tuples(st.integers(0, 4), st.sampled_from("pqmx")), max_size=2),
+       gap_at=st.lists(st.integers(0, 4), max_size=1))
+@pytest.mark.tor("TOR-VER-004")
+def test_kleene_values_at_every_tick_are_what_every_count_and_filling_gives(node, rows, holes,
+                                                                           gap_at):
+    """Kleene's reading of any past-time formula at every tick (a gap tick at each of the
+    ticks it stands for): true where every completion is, false where none is (the
+    two-valued engine over the filled trace)."""
+    n = len(rows)
+    cols = _columns(rows, set("pqmx"))
+    gaps = sorted({i for i in gap_at if i < n})
+    cells = sorted({(i, v) for i, v in holes if i < n and i not in gaps})
+    unknown: dict = {v: np.zeros(n, np.bool_) for v in cols}
+    for i, v in cells:
+        unknown[v][i] = True
+    stretch = np.zeros(n, np.bool_)
+    stretch[gaps] = True
+    for v in cols:
+        unknown[v][gaps] = True
+    values = kleene_values(node, cols, unknown, n, 0, {}, stretch=stretch)
+    for filled, m, at in _completions(cols, n, cells, gaps, counts=(1, 2)):
+        truth = node_series(node, filled, m)
+        for i in range(n):
+            span = truth[at[i]:(at[i + 1] if i + 1 < n else m)]
+            if values[i] > 0:
+                assert span.all(), (node, rows, cells, gaps, i)
+            elif values[i] < 0:
+                assert not span.any(), (node, rows, cells, gaps, i)

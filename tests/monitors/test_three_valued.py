@@ -19,9 +19,9 @@ from fretc.compiler.codegen import monitor_source
 from fretc.fretish import load_requirements
 from fretc.logs.base import Gap
 from fretc.monitors.judge import ltl3_verdict as ltl3_two
-from fretc.monitors.completions import pt_verdict
-from fretc.monitors.three_valued import ThreeValued, ltl3_verdict
-from fretc.monitors.vectorized import pt_series
+from fretc.monitors.completions import decide
+from fretc.monitors.three_valued import ltl3_verdict
+from fretc.monitors.vectorized import node_series, pt_series
 
 SENTENCES = [
     "the sw shall always satisfy p",
@@ -74,8 +74,8 @@ def test_a_verdict_is_what_every_completion_gives(text, rows, holes):
     cells = sorted({(i, v) for i, v in holes if i < n and v in cols})
     for i, v in cells:
         unknown.setdefault(v, np.zeros(n, np.bool_))[i] = True
-    got, _pair = pt_verdict(f.pt, cols, unknown, n)
-    status, tick = ltl3_verdict(ms, ThreeValued(cols, unknown, n))
+    got, _reading, _why = decide(f.pt, cols, unknown, n)
+    status, tick = ltl3_verdict(ms, cols, unknown, n)
     outcomes, ltl3s = set(), []
     values = {"p": (False, True), "q": (False, True), "m": (False, True),
               "x": (0.0, 1.0, 2.0)}
@@ -127,15 +127,11 @@ SCOPED = [
 
 
 def _definite_triggers(text, cols, unknown, n):
-    from fretc.monitors.interval import evaluate_requirement
-    from fretc.monitors.judge3 import definite_evidence
-    from fretc.monitors.unknowns import Unknowns
+    from fretc.monitors.definite import definite_evidence
 
     c, _ms = _compiled_of(text)
     req, ticks = c.entry.requirement, c.formalization.ticks
-    u = Unknowns.of(req, unknown, cols, n, True)
-    ev = evaluate_requirement(req, cols, n, ticks, favour=u)
-    return definite_evidence(req, ev, u, cols).triggers, req, ticks
+    return definite_evidence(req, cols, unknown, n, ticks)[0].triggers, req, ticks
 
 
 @settings(max_examples=200, deadline=None)
@@ -178,20 +174,21 @@ def test_a_trigger_before_an_unknown_scope_end_is_counted():
        start=st.integers(0, 11))
 def test_the_stepped_pt_program_equals_the_vectorized_pt(text, rows, start):
     """The pt formula stepped tick by tick over its state (:mod:`fretc.monitors.completions`,
-    the exact search's step), from the state read at any tick, gives the vectorized
-    evaluator's value at every tick after it."""
-    from fretc.monitors.completions import _Program
+    the exact search's step), from the state read at any tick (the completions' reading of
+    it, from the values kept before it), gives the vectorized evaluator's value at every
+    tick after it."""
+    from fretc.monitors.completions import CompletionsStream
 
     c, _ms = _compiled_of(text)
     f = c.formalization
     n = len(rows)
     start = min(start, n - 1)
     cols = _columns(rows, set(f.variables))
-    ev = ThreeValued(cols, {}, n)
-    want = ev.pair(f.pt)[0]
-    prog = _Program(f.pt)
-    state = prog.state_at(ev, start)
+    want = pt_series(f.pt, cols, n)
+    run = CompletionsStream(f.pt, start, start, n)
+    run.feed(cols, {}, start)  # (the values before ``start`` kept)
+    prog, state = run.prog, run._state_at_first()
     for i in range(start, n):
-        leaves = {k: bool(ev.pair(prog.nodes[k])[0][i]) for k in prog.leaves}
+        leaves = {k: bool(node_series(prog.nodes[k], cols, n)[i]) for k in prog.leaves}
         got, state = prog.step(state, leaves, i)
         assert got == bool(want[i]), (text, rows, start, i)
