@@ -13,7 +13,7 @@ import numpy as np
 
 from fretc.common.problems import BindingError, SignalError
 from fretc.signals.bindings.compile import EvalError, EvalState, compile_node
-from fretc.signals.bindings.expression import (TF_TOPICS, BinOp, Const, Expr, ExprLocation, Field, FuncCall, Ref,
+from fretc.signals.bindings.expression import (GEOMETRY_CALLS, TF_TOPICS, geometry_tf, BinOp, Const, Expr, ExprLocation, Field, FuncCall, Ref,
                          UnaryOp, check, check_aggregate, check_size, substitute, unparse, walk)
 from fretc.signals.bindings.extract import Valid, normalize_scalar
 from fretc.signals.bindings.parse_cache import kept_parses
@@ -218,7 +218,8 @@ def compile_expression(name: str, expr: str, *, source: str = "<expression>",
         fields += tuple(f for p in parts for f in p.fields)
     scalar = compile_node(body, Ops(False, unread, inf_unread), extractors, constants)
     vector = compile_node(body, Ops(True, unread, inf_unread), extractors, constants)
-    uses_tf = any(isinstance(n, FuncCall) and n.func == "tf" for n in walk(node))
+    uses_tf = any(isinstance(n, FuncCall) and (n.func == "tf" or n.func in GEOMETRY_CALLS
+                                                and geometry_tf(n)) for n in walk(node))
     if uses_tf:  # tf() reads whole messages of both topics: decoders must keep transforms
         fields += tuple(Field(1, t, ("transforms",)) for t in TF_TOPICS)
     return Binding(name, expr, source, line, col, node, topics, fields, exact, constants,

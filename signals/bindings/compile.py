@@ -17,9 +17,12 @@ import numpy as np
 
 from fretc.common.units import NS_PER_S
 
-from fretc.signals.bindings.expression import BinOp, Const, EntityParam, Expr, const_value, Field, FuncCall, Named, UnaryOp, walk
+from fretc.signals.bindings.expression import (GEOMETRY_CALLS, GEOMETRY_VALUES, BinOp, Const, EntityParam, Expr,
+                                               Field, FuncCall, Named, UnaryOp, const_value,
+                                               geometry_tf, walk)
 from fretc.signals.bindings.extract import FieldAccessError, Valid, make_extractor
 from fretc.signals.bindings.frames import LookupFailed, TfBuffer, pick_joint
+from fretc.signals.bindings.geometry import compile_geometry
 from fretc.signals.bindings.operations import (COMPARISONS, LOGICAL, NP_BINARY, PY_BINARY, PY_TYPES, Ops, max2, min2,
                          np_three_valued, num, py_three_valued, undeclared_inf)
 
@@ -249,7 +252,11 @@ def _call(node: FuncCall, ops: Ops, extractors: dict[Field, Evaluator],
         return _stateful(node, ops, consts)
     if func == "sector":
         return _sector(node, ops, extractors, consts)
+    if func in GEOMETRY_CALLS:
+        return _geometry(node, ops, extractors, consts)
     args = [compile_node(a, ops, extractors, consts) for a in node.args]
+    if func in _TRIG:
+        return _trig(node, args, ops)
     if func == "sqrt":
         a0 = args[0]
 
@@ -273,6 +280,56 @@ def _call(node: FuncCall, ops: Ops, extractors: dict[Field, Evaluator],
     if func in ("min", "max", "norm") and len(args) > 1:
         return _several(node, args)
     return _reduction(node, args[0], ops)
+
+
+#: trigonometry (rad): numpy's in both evaluations, so that a tick's value and a block's are
+#: one (libm's and numpy's sin may differ in the last bit)
+_TRIG = {"sin": np.sin, "cos": np.cos, "tan": np.tan, "asin": np.arcsin, "acos": np.arccos,
+         "atan": np.arctan, "atan2": np.arctan2}
+
+
+def _trig(node: FuncCall, args: list[Evaluator], ops: Ops) -> Evaluator:
+    """``sin(x)`` ... ``atan2(y, x)`` (rad; NaN outside ``asin``'s and ``acos``'s [-1, 1] and
+    for an infinite ``sin``, ``cos``, ``tan``), item by item on arrays."""
+    fn = _TRIG[node.func]
+    if node.func == "atan2":
+        a0, a1 = args
+
+        def atan2_(st: Any) -> Any:
+            y, x = a0(st), a1(st)
+            with np.errstate(all="ignore"):
+                if type(y) in PY_TYPES and type(x) in PY_TYPES:
+                    return float(fn(float(y), float(x)))
+                return ops.lift2(fn, y, x, True)
+        return atan2_
+    a0 = args[0]
+
+    def trig(st: Any) -> Any:
+        a = a0(st)
+        with np.errstate(all="ignore"):
+            if type(a) in PY_TYPES:
+                return float(fn(float(a)))
+            return ops.lift1(fn, a, True)
+    return trig
+
+
+def _geometry(node: FuncCall, ops: Ops, extractors: dict[Field, Evaluator],
+              consts: dict[str, Any]) -> Evaluator:
+    """A geometry call (:mod:`fretc.signals.bindings.geometry`). Vectorized, one of one
+    topic's messages that reads no TF (``points_in(scan_points(/scan), polygon(...))``) is
+    computed once per message over the block's messages and gathered per tick, as a
+    reduction is."""
+    def build(o: Ops) -> Evaluator:
+        return compile_geometry(node, o.vec, lambda a: compile_node(a, o, extractors, consts),
+                                EvalError)
+    if not ops.vec or node.func in GEOMETRY_VALUES:
+        return build(ops)
+    topic = per_message_topic(node)
+    vector = build(ops)
+    if topic is None:
+        return vector
+    scalar = build(Ops(False, ops.nan_unread, ops.inf_unread))
+    return lambda cols: cols.per_message(node, topic, vector, scalar)
 
 
 def _entity_age(node: FuncCall, param: Any) -> Evaluator:
@@ -510,6 +567,8 @@ def per_message_topic(node: Expr) -> str | None:
         if isinstance(n, FuncCall) and n.func in ("age", "delta", "timedelta", "derivative",
                                                   "unchanged"):
             return None
+        if isinstance(n, FuncCall) and n.func in GEOMETRY_CALLS and geometry_tf(n):
+            return None  # (TF: every message of /tf and /tf_static, not the held one)
         if isinstance(n, Field):
             topics.add(n.topic)
     return topics.pop() if len(topics) == 1 else None

@@ -22,7 +22,7 @@ from fretc.logs.schema import closest
 from fretc.signals.bindings.paths import quote, topic_text
 
 __all__ = ["Expr", "EntityParam", "const_value", "Const", "Named", "Slice", "Filter", "Field", "Ref", "UnaryOp", "BinOp",
-           "FuncCall", "Span", "FUNCS", "MODIFIERS", "STATEFUL", "stateful_topics", "age_only_topics", "AGGREGATES", "check_aggregate", "written", "TF_COMPONENTS", "TF_TOPICS",
+           "FuncCall", "Span", "FUNCS", "GEOMETRY_CALLS", "GEOMETRY_VALUES", "geometry_tf", "MODIFIERS", "STATEFUL", "stateful_topics", "age_only_topics", "AGGREGATES", "check_aggregate", "written", "TF_COMPONENTS", "TF_TOPICS",
            "ExprLocation", "check", "check_size", "walk", "refs",
            "substitute", "unparse", "MAX_EXPR_CHARS"]
 
@@ -200,7 +200,18 @@ FUNCS = {
     "min_of_messages": (1, 1), "max_of_messages": (1, 1),
     "sqrt": (1, 1), "delta": (1, 1), "timedelta": (1, 1), "derivative": (1, 1),
     "unchanged": (1, 1), "sector": (5, 5),
+    # trigonometry (rad), item by item on arrays
+    "sin": (1, 1), "cos": (1, 1), "tan": (1, 1), "asin": (1, 1), "acos": (1, 1),
+    "atan": (1, 1), "atan2": (2, 2),
+    # geometry (docs/bindings.md "Geometry"): the arities of the forms the parser expands
+    # them into (fretc.signals.bindings.geometry_args)
+    "scan_points": (4, 5), "cloud_points": (10, 11), "polygon": (3, None),
+    "points_in": (2, 2), "collision_time": (6, 7),
 }
+#: The geometry calls; those whose value is points or a polygon, which only ``points_in`` and
+#: ``collision_time`` take
+GEOMETRY_CALLS = ("scan_points", "cloud_points", "polygon", "points_in", "collision_time")
+GEOMETRY_VALUES = ("scan_points", "cloud_points", "polygon")
 #: Foxglove's message path modifiers a field may end in (``/odom.x@derivative``).
 MODIFIERS = ("derivative", "delta", "timedelta", "abs", "negative", "sqrt", "rad2deg",
              "deg2rad")
@@ -266,6 +277,8 @@ def unparse(node: Expr) -> str:
     if isinstance(node, Span):
         return node.text
     if isinstance(node, FuncCall):
+        if node.func in GEOMETRY_CALLS:
+            return _geometry_text(node)
         if node.func == "tf":
             a = node.args
             return f"tf({unparse(a[0])}, {unparse(a[1])}).{a[2].value}"  # type: ignore
@@ -273,6 +286,30 @@ def unparse(node: Expr) -> str:
                 if node.func == "sector" else node.args)
         return f"{node.func}({', '.join(unparse(a) for a in args)})"
     raise TypeError(type(node).__name__)
+
+
+def _geometry_text(node: FuncCall) -> str:
+    """A geometry call (:mod:`fretc.signals.bindings.geometry_args`: its canonical arguments)
+    as written."""
+    a = node.args
+    if node.func not in GEOMETRY_VALUES:
+        return f"{node.func}({', '.join(unparse(x) for x in a)})"
+    kind = a[0].value  # type: ignore[attr-defined]
+
+    def base(f: Expr, drop: int) -> str:  # (the message a canonical field was read from)
+        assert isinstance(f, Field)
+        return Field(f.col, f.topic, f.path[:len(f.path) - drop]).text()
+
+    if node.func in ("scan_points", "cloud_points"):
+        rest = [quote(str(kind))] if kind else []
+        low = a[1] if node.func == "cloud_points" else None
+        if isinstance(low, (Const, UnaryOp)) and unparse(low) not in ("-inf", "(-inf)"):
+            rest += [unparse(a[1]), unparse(a[2])]
+        first = base(a[1] if node.func == "scan_points" else a[3], 1)
+        return f"{node.func}({', '.join([first, *rest])})"
+    if kind == "vertices":
+        return f"polygon({', '.join(unparse(x) for x in a[1:])})"
+    return f"polygon({base(a[1], 4 if kind == 'stamped' else 3)})"
 
 
 def _operand(node: Expr) -> str:
@@ -388,7 +425,41 @@ def check(node: Expr, where: ExprLocation, topics: set[str]) -> None:
     # a Ref is resolved against the other variables (substitute)
 
 
+def geometry_tf(node: FuncCall) -> bool:
+    """Whether the geometry call ``node`` reads TF (points moved into a named frame, or a
+    polygon read in its header's frame), itself or through its arguments."""
+    if node.func in ("scan_points", "cloud_points"):
+        return bool(const_value(node.args[0].value))  # type: ignore[attr-defined]
+    if node.func == "polygon":
+        return const_value(node.args[0].value) == "stamped"  # type: ignore[attr-defined]
+    return any(isinstance(a, FuncCall) and a.func in GEOMETRY_CALLS and geometry_tf(a)
+               for a in node.args)
+
+
+def _check_geometry(node: FuncCall, where: ExprLocation, topics: set[str]) -> None:
+    """``points_in``/``collision_time``: their points and polygon (values only they take)
+    read the topics of their fields; TF when they move points between frames."""
+    for a in node.args[:2]:
+        assert isinstance(a, FuncCall)  # (geometry_args.expand checked)
+        for x in a.args:
+            if isinstance(x, Field):
+                topics.add(x.topic)
+            elif not isinstance(x, Const):
+                check(x, where, topics)
+    if geometry_tf(node):
+        topics.update(TF_TOPICS)
+    for a in node.args[2:]:
+        check(a, where, topics)
+
+
 def _check_call(node: FuncCall, where: ExprLocation, topics: set[str]) -> None:
+    if node.func in GEOMETRY_VALUES:
+        raise where.error(f"{unparse(node)} gives {'a polygon' if node.func == 'polygon' else 'points'}, "
+                          "which only points_in() and collision_time() take (a variable is a "
+                          "boolean or a number)", node.col)
+    if node.func in ("points_in", "collision_time"):
+        _check_geometry(node, where, topics)
+        return
     if node.args and isinstance(node.args[-1], Span):  # a window (windowing.check_window)
         for a in node.args[:-1]:
             if isinstance(a, Field) and not a.path:  # rate(/scan, 1s), count(/estop, 1min)

@@ -21,7 +21,7 @@ from fretc.common.textsafe import visible
 from fretc.common.units import NS_PER_S
 
 __all__ = ["LookupFailed", "TfBuffer", "pick_joint", "compose", "invert", "yaw_of",
-           "frame_name", "FRAME_FIELDS"]
+           "frame_name", "FRAME_FIELDS", "Transform"]
 
 #: The fields whose strings are TF frame names (std_msgs/Header's ``frame_id``,
 #: geometry_msgs/TransformStamped's ``child_frame_id``): an entity keyed by one is a frame
@@ -120,6 +120,27 @@ class TfBuffer:
                 times.append(t)
         return tr, times
 
+    def transform(self, parent: str, child: str) -> Transform:
+        """``child``'s pose in ``parent``'s frame (the transform that moves a point given in
+        ``child``'s frame into ``parent``'s) from the transforms held (identity for one frame).
+
+        Raises:
+            LookupFailed: the frames do not connect in the transforms held."""
+        parent, child = frame_name(parent), frame_name(child)
+        if parent == child:
+            return _IDENTITY
+        up_p, up_c = self._chain(parent), self._chain(child)
+        common = next((f for f in up_c if f in up_p), None)
+        if common is None:
+            raise self._unconnected(parent, child)
+        return compose(invert(self._to_root(up_p, common)[0]), self._to_root(up_c, common)[0])
+
+    def _unconnected(self, parent: str, child: str) -> LookupFailed:
+        known = sorted(set(self.edges) | {e[0] for e in self.edges.values()})
+        return LookupFailed(
+            f"frames {parent!r} and {child!r} do not connect in the transforms of /tf and "
+            f"/tf_static held at this tick (frames: {', '.join(visible(k) for k in known) or 'none yet'})")
+
     def lookup(self, parent: str, child: str, component: str, now: int) -> float:
         """``component`` (x, y, z in m; yaw in rad; age in s) of ``child``'s pose in
         ``parent``'s frame at tick time ``now`` (ns); age is the largest time since a
@@ -132,10 +153,7 @@ class TfBuffer:
         up_p, up_c = self._chain(parent), self._chain(child)
         common = next((f for f in up_c if f in up_p), None)
         if common is None:
-            known = sorted(set(self.edges) | {e[0] for e in self.edges.values()})
-            raise LookupFailed(
-                f"frames {parent!r} and {child!r} do not connect in the transforms of /tf and "
-                f"/tf_static held at this tick (frames: {', '.join(visible(k) for k in known) or 'none yet'})")
+            raise self._unconnected(parent, child)
         t_p, times_p = self._to_root(up_p, common)
         t_c, times_c = self._to_root(up_c, common)
         if component == "age":

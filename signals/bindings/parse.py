@@ -28,6 +28,7 @@ from fretc.fretish.limits import MAX_EXPR_DEPTH
 from fretc.signals.bindings.expression import (MAX_EXPR_CHARS, MODIFIERS, STATEFUL, BinOp, Const, EntityParam, Expr,
                          ExprLocation, Field, Filter, FuncCall, Named, Ref, Slice, Span,
                          TF_COMPONENTS, UnaryOp, check, check_size)
+from fretc.signals.bindings.geometry_args import GEOMETRY, expand
 from fretc.signals.bindings.paths import unquote
 
 __all__ = ["parse_expression"]
@@ -222,6 +223,8 @@ class _ToExpr(Transformer):
             args = _joint_args(args, self.where, name.column)
         if name == "sector":
             args = _sector_args(args, self.where, name.column)
+        if name in GEOMETRY:  # (docs/bindings.md "Geometry": the fields each reads)
+            return expand(str(name), args, self.where, name.column)
         return FuncCall(name.column, str(name), args)
 
     def call_member(self, meta, kids):

@@ -13,10 +13,11 @@ from collections.abc import Mapping
 from typing import Any
 
 from fretc.common.streams import base_topic
+from fretc.common.problems import BindingError
 from fretc.logs.schema import FieldPathError
 from fretc.signals.bindings.binding import Binding
 from fretc.logs.mcap.encodings import constant_name
-from fretc.signals.bindings.expression import (BinOp, Const, EntityParam, Expr, ExprLocation, Field, Filter, FuncCall, Named, Span,
+from fretc.signals.bindings.expression import (GEOMETRY_CALLS, BinOp, Const, EntityParam, Expr, ExprLocation, Field, Filter, FuncCall, Named, Span,
                          UnaryOp, unparse)
 
 __all__ = ["check_types"]
@@ -210,6 +211,49 @@ class _TypeChecker:
             self.both(node, a, b, _BOOLS, f"{op!r} takes booleans")
         return "array_bool" if arr else "bool"
 
+    def geometry(self, node: FuncCall) -> str:
+        """The type of a geometry call (:mod:`fretc.signals.bindings.geometry_args`'s
+        canonical arguments): ``"points"``, ``"polygon"`` or ``"number"``; each field it
+        reads checked against the message's type, named in the error."""
+        f = node.func
+        if f in _GEOMETRY_FIELDS:
+            typename, wanted = _GEOMETRY_FIELDS[f]
+            for a, want in zip(node.args[1:], wanted):
+                try:
+                    t = self.type(a)
+                except BindingError as exc:
+                    raise self.where.error(f"type error: {f}() reads a {typename}: {exc.message}",
+                                           node.col) from None
+                if t not in ("any", want) and not (want == "bool" and t == "number"):
+                    raise self.where.error(f"type error: {f}() reads a {typename}, but "
+                                           f"{_describe(a, t)}", node.col)
+            return "points"
+        if f == "polygon":
+            kind = node.args[0].value  # type: ignore[attr-defined]
+            if kind == "vertices":
+                for a in node.args[1:]:
+                    self.need(a, self.type(a), ("number",), "polygon() takes its vertices' "
+                              "coordinates as numbers (m)", node)
+                return "polygon"
+            for a in node.args[1:3]:
+                try:
+                    t = self.type(a)
+                except BindingError as exc:
+                    raise self.where.error("type error: polygon() reads a geometry_msgs/"
+                                           f"Polygon{'Stamped' if kind == 'stamped' else ''}: "
+                                           f"{exc.message}", node.col) from None
+                self.need(a, t, ("array_number",), "polygon() reads its vertices' x and y",
+                          node)
+            if kind == "stamped":
+                self.type(node.args[3])
+            return "polygon"
+        p, g = self.type(node.args[0]), self.type(node.args[1])
+        assert p == "points" and g == "polygon"  # (parse checked the calls)
+        for a in node.args[2:]:
+            self.need(a, self.type(a), ("number",), f"{f}() takes the twist (m/s, rad/s) and "
+                      "its times (s) as numbers", node)
+        return "number"
+
     def both(self, node: BinOp, a: str, b: str, ok: tuple, what: str) -> None:
         """Both operands of ``node`` (types ``a``, ``b``) must be one of ``ok``."""
         self.need(node.left, a, ok, what, node)
@@ -231,6 +275,14 @@ class _TypeChecker:
             return "number"
         if f in ("age", "tf", "timedelta", "waiting", "goal_waiting"):
             return "number"
+        if f in GEOMETRY_CALLS:
+            return self.geometry(node)
+        if f in ("sin", "cos", "tan", "asin", "acos", "atan", "atan2"):
+            ts = [self.type(a) for a in node.args]
+            for a, t in zip(node.args, ts):
+                self.need(a, t, _NUMS, f"{f}() takes numbers (rad for sin, cos, tan)", node)
+            return ("array_number" if any("array" in t for t in ts)
+                    else "any" if "any" in ts else "number")
         if f == "unchanged":
             self.type(node.args[0])
             return "bool"
@@ -286,6 +338,16 @@ class _TypeChecker:
                     raise self.where.error(f"type error: {f}() of several values takes "
                                            f"numbers, but {_describe(a, t)}", node.col)
         return "number"
+
+
+#: the fields each geometry value reads and what they must be (docs/bindings.md "Geometry"):
+#: function -> (message type, per canonical argument after the frame: the type wanted or None)
+_GEOMETRY_FIELDS = {
+    "scan_points": ("sensor_msgs/LaserScan", ("array_number", "number", "number", "string")),
+    "cloud_points": ("sensor_msgs/PointCloud2", ("number", "number", "array_number",
+                                                 "array_other", "number", "number", "number",
+                                                 "number", "bool", "string")),
+}
 
 
 def _zero_or_one(node: BinOp) -> bool:
