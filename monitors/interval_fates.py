@@ -150,7 +150,7 @@ class Bounded:
               ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(failed, violation tick, window end) of triggers ``t`` whose first event is at
         ``nx`` and interval end at ``e`` (either :data:`_INF`: beyond the ticks seen), as
-        :class:`~fretc.monitors.obligations.ObligationChecker` decides them."""
+        :data:`fretc.monitors.obligations.OBLIGATIONS` words them."""
         timing, k = self.timing, self.k
         d = t + self.dk
         if timing == "immediately":

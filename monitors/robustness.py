@@ -667,16 +667,16 @@ class _Rho:
 
     def _once(self, node: Node) -> np.ndarray:
         """``O`` / ``H``: running max / min, or over the window ``[i-hi, i-lo]``."""
-        x, is_once = self.rho(node.args[0]), node.op == "O"
-        pick = np.maximum if is_once else np.minimum
-        if node.hi is None:
-            out = pick.accumulate(x)
-            before = self._carried(node, None)
-            if before is not None:
-                out = pick(out, before)
-            self._keep(node, float(out[-1]))
-            return out
-        return self._bounded(node, x)
+        if node.hi is not None:  # (the operand's values held by _bounded alone)
+            return self._bounded(node, self.rho(node.args[0]))
+        x = self.rho(node.args[0])
+        pick = np.maximum if node.op == "O" else np.minimum
+        out = pick.accumulate(x)
+        before = self._carried(node, None)
+        if before is not None:
+            out = pick(out, before)
+        self._keep(node, float(out[-1]))
+        return out
 
     def _bounded(self, node: Node, x: np.ndarray) -> np.ndarray:
         """``O[lo,hi]`` / ``H[lo,hi]`` of the operand's values ``x``: the max / min over the
