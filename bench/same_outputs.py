@@ -6,7 +6,9 @@ Usage::
 
 The revision ``--ref`` is exported with ``git archive`` into a temporary folder; both trees
 then run the same commands with the same Python (this virtual environment; each tree's own
-packages first on ``PYTHONPATH``), in their own folder, on the same inputs:
+package first on ``PYTHONPATH``: its ``src/`` where the package's root is there, so that an
+editable install of this clone does not answer for the reference), in their own folder, on
+the same inputs:
 
 * ``fretc FILE --emit ltl --json``, ``--emit monitor``, ``--emit psl`` for every requirement
   file in ``requirements/`` and for FRET's vectors (``../shared/fretish/fret_vectors.jsonl``,
@@ -95,7 +97,10 @@ def _commands(inputs: list[Path], audit: bool) -> list[tuple[str, list[str]]]:
 def _run_tree(tree: Path, cmds, dest: Path, cache_dir: Path) -> None:
     """Run every command in ``tree``; results go to ``dest/<name>/``; fretc's disk cache
     (whose keys name the code they depend on) in ``cache_dir``."""
-    env = dict(os.environ, PYTHONPATH=str(tree), SOURCE_DATE_EPOCH="1700000000",
+    # (the tree's own package: its src/ since the package's root moved there, which an
+    # editable install of this clone would shadow otherwise)
+    own = tree / "src" if (tree / "src" / "fretc").is_dir() else tree
+    env = dict(os.environ, PYTHONPATH=str(own), SOURCE_DATE_EPOCH="1700000000",
                FRETC_CACHE_DIR=str(cache_dir), COLUMNS="120", NO_COLOR="1",
                PYTHONHASHSEED="0")
     for name, args in cmds:
