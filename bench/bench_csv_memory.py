@@ -4,6 +4,7 @@
     python bench/bench_csv_memory.py --rows 1000000 10000000 --requirements 2
     python bench/bench_csv_memory.py --rows 1000000 --trace   # where the bytes go (tracemalloc)
     python bench/bench_csv_memory.py --nan first last --no-runner  # one NaN linear_speed
+    python bench/bench_csv_memory.py --gap middle --no-runner      # one gap row
 
 1. Writes a plain CSV trace (``time`` in seconds every 100 ms, then the Safe-ROS variables;
    obstacles come and go, the robot stops within 0.5 s, speeds under their limits: every
@@ -19,6 +20,8 @@
    ``--nan first``/``last``: the same trace with ``linear_speed`` NaN in its first or last
    row (R4 and the others reading it have an unknown tick: judged in three-valued
    semantics, :mod:`fretc.audit.streamed_three`, against the whole-trace three-valued judge).
+   ``--gap middle``: the same trace with a ``gap`` row in its middle (a gap tick, one tick
+   or more: every requirement judged in three-valued semantics).
 3. ``--trace``: the audit in this process under :mod:`tracemalloc`: the peak of Python
    allocations and the 15 largest allocation sites at the peak (numpy arrays included).
 """
@@ -111,6 +114,24 @@ def with_nan(trace: Path, where: str) -> Path:
                 g.write(row)
                 row = nxt
             g.write(nan(row))
+    return out
+
+
+def with_gap(trace: Path) -> Path:
+    """A copy of ``trace`` (beside it, reused) with a ``gap`` row between its two middle
+    rows (its time between theirs, every other cell ``gap``)."""
+    out = trace.with_name(f"{trace.stem}_gap_middle.csv")
+    if out.exists():
+        return out
+    with open(trace, encoding="ascii") as f:
+        rows = sum(1 for _ in f) - 1
+    with open(trace, encoding="ascii") as f, open(out, "w", encoding="ascii") as g:
+        g.write(f.readline())
+        for i, line in enumerate(f):
+            g.write(line)
+            if i == rows // 2:
+                t = float(line.split(",", 1)[0]) + 0.05
+                g.write(",".join([f"{t:.2f}"] + ["gap"] * (len(COLUMNS) - 1)) + "\n")
     return out
 
 
@@ -217,6 +238,8 @@ def main() -> None:
     ap.add_argument("--no-whole", action="store_true", help="skip the whole-trace judge")
     ap.add_argument("--nan", nargs="+", choices=["none", "first", "last"], default=["none"],
                     help="a NaN linear_speed in the trace's first or last row")
+    ap.add_argument("--gap", choices=["none", "middle"], default="none",
+                    help="a gap row in the middle of the trace")
     args = ap.parse_args()
     work = Path(args.workdir)
     work.mkdir(parents=True, exist_ok=True)
@@ -229,6 +252,8 @@ def main() -> None:
             write_trace(trace, rows)
         if nan != "none":
             trace = with_nan(trace, nan)
+        if args.gap != "none":
+            trace = with_gap(trace)
         for n in args.requirements:
             fret = work / f"req{n}.fret"
             fret.write_text(REQUIREMENTS[n])
