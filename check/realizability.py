@@ -32,7 +32,7 @@ environment has to react to the outputs and the report says so.
 
 from __future__ import annotations
 
-from collections.abc import Collection, Sequence
+from collections.abc import Collection, Mapping, Sequence
 from typing import Any, TYPE_CHECKING
 
 from fretc.common.errors import CheckError
@@ -488,8 +488,12 @@ def _exact_bounds(phis: Sequence[ir.Node], inputs: Sequence[str], streams: Colle
                   ) -> dict[ir.Node, Bound]:
     """The bounds of ``phis`` read exactly (:mod:`fretc.check.bounds`): those of outputs
     compared with no constant by ``=``/``!=`` (no half-line) and in no other comparison of
-    several variables, reading no stream variable; the others stay comparisons of inputs
-    and outputs (:func:`fretc.check.predicates.mixed_invariants`)."""
+    several variables, reading no controller's stream variable (an environment's stream, a
+    role ``"input"`` in a mapping ``streams``, is an input: its number is the tick's, as
+    ``preReal`` of an input is); the others stay comparisons of inputs and outputs
+    (:func:`fretc.check.predicates.mixed_invariants`)."""
+    if isinstance(streams, Mapping):
+        streams = [n for n, role in streams.items() if role != "input"]
     bounds = bounds_of(phis, inputs)
     other: set[str] = set()
     for f in phis:

@@ -81,6 +81,9 @@ NUMBER_FORMS = ["{p}", "abs({p})", "{p}@abs", "{p}@negative", "{p}@delta", "{p}@
                 "{p}@deg2rad", "delta({p})", "timedelta({p})", "{p}@sqrt",
                 "max_of_messages({p})", "min_of_messages({p})", "age({t})",
                 "min({p}, {p} + 1)", "max({p}, 0)",
+                # trigonometry (radians), each defined on every double the sweep draws
+                "sin({p}) + cos({p})", "atan({p}) - tan({p} * 1e-3)",
+                "asin(sin({p})) + acos(cos({p}))", "atan2({p}, 1)",
                 # windows over time (the whole binding): a duration, a count of messages
                 "mean({p}, 500 ms)", "percentile({p}, 90, 1 s)", "sum({p}, 3 messages)",
                 "variance({p}, 1 s)", "median({p}, 2 messages)", "rate({t}, 1 s)"]

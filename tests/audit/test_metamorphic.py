@@ -299,6 +299,11 @@ def test_the_watch_clock_and_the_sampled_csv_give_the_audit_on_every_log(case, t
 
 
 # --------------------------------------------------------------------------- generation
+#: the geometry of scans, clouds and polygons: tests/signals/test_geometry.py judges them on
+#: the raw scans of a shipped trace, TF and generated clouds
+GEOMETRY = ("scan_points", "cloud_points", "polygon", "points_in", "collision_time")
+
+
 def test_the_generated_sets_use_every_function_and_modifier():
     """The forms the sweep draws from cover the binding language's functions and
     modifiers (a new function must be added to them)."""
@@ -307,7 +312,8 @@ def test_the_generated_sets_use_every_function_and_modifier():
     text = " ".join(M.NUMBER_FORMS + M.ARRAY_FORMS + M.BOOL_FORMS)
     missing = [f for f in FUNCS if f"{f}(" not in text and f not in ("any", "all", "joint",
                                                                      "tf", "waiting", "goal_waiting",
-                                                                     "sector")]
+                                                                     "sector",
+                                                                     *GEOMETRY)]
     missing += [m for m in MODIFIERS if f"@{m}" not in text]
     assert missing == []
     # any/all over items, joint() and tf() need arrays of names and transforms: the robot
