@@ -7,8 +7,9 @@ tests' runs, merged).
     python tests/tor_matrix.py [--junit FILE ...] [-o matrix.md]
 
 prints (or writes) the matrix as Markdown and exits 1 when a requirement has neither a test
-nor a ``not_verified`` reason, or a marker names an id the requirements file does not have
-(CI runs it after the tests: .ci/run). A test's result is ``passed``, ``failed``,
+nor a ``not_verified`` reason, or a marker names an id the requirements file does not have,
+and, given JUnit files, when a requirement's traced test failed or was not run in any of
+them, or all its traced tests were skipped (CI runs it after the tests: .ci/run). A test's result is ``passed``, ``failed``,
 ``skipped`` or ``not run`` (deselected in that run: ``slow``, ``long``), over all its
 parametrized cases (failed when one failed).
 """
@@ -92,9 +93,14 @@ def junit_results(path: Path) -> dict[str, str]:
     return out
 
 
-def problems(reqs: list, marked: dict[str, list[str]]) -> list[str]:
+def problems(reqs: list, marked: dict[str, list[str]],
+             results: dict[str, str] | None = None) -> list[str]:
     """What makes the matrix fail: a marker naming an unknown id; a requirement with no
-    test and no ``not_verified`` reason; one with both (the reason is stale)."""
+    test and no ``not_verified`` reason; one with both (the reason is stale); and with
+    ``results`` (the runs' JUnit results), a requirement one of whose traced tests failed or
+    was not run, or whose traced tests were all skipped: what shows it must have run and
+    passed (IEC 61508-3 7.4.4.10: evidence of the tool's conformance, not of its tests'
+    presence)."""
     known = {r.id for r in reqs}
     out = [f"{node}: unknown requirement {i}" for node, ids in sorted(marked.items())
            for i in ids if i not in known]
@@ -104,6 +110,16 @@ def problems(reqs: list, marked: dict[str, list[str]]) -> list[str]:
             out.append(f"{r.id}: no test shows it and no not_verified reason says why")
         if r.id in shown and r.not_verified:
             out.append(f"{r.id}: tests show it, but it is marked not verified")
+    if results is None:
+        return out
+    for r in reqs:
+        tests = sorted(n for n, ids in marked.items() if r.id in ids)
+        got = {n: results.get(n, "not run") for n in tests}
+        for n, result in got.items():
+            if result in ("failed", "not run"):
+                out.append(f"{r.id}: its traced test {n} {result}")
+        if tests and all(v == "skipped" for v in got.values()):
+            out.append(f"{r.id}: every traced test was skipped ({len(tests)})")
     return out
 
 
@@ -148,7 +164,7 @@ def main(argv: list[str] | None = None) -> int:
         args.output.write_text(text, encoding="utf-8")
     else:
         sys.stdout.write(text)
-    found = problems(reqs, marked)
+    found = problems(reqs, marked, results)
     for p in found:
         print(f"tor_matrix: {p}", file=sys.stderr)
     return 1 if found else 0

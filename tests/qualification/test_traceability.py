@@ -77,3 +77,21 @@ def test_the_matrix_carries_each_tests_last_result(tmp_path: Path):
     assert "| TOR-AAA-001 | `tests/x/test_y.py::test_a` | failed |" in text
     assert "| TOR-AAA-001 | `tests/x/test_y.py::test_e` | not run |" in text
     assert "| TOR-AAA-002 | not verified: no rig | |" in text
+
+
+@pytest.mark.tor("TOR-QUA-001")
+def test_the_gate_fails_on_a_failed_a_not_run_or_an_all_skipped_traced_test():
+    """With results, the matrix fails a requirement whose traced test failed or was not run,
+    or whose traced tests were all skipped; one passed beside a skipped one is shown."""
+    reqs = [Requirement(f"TOR-AAA-00{k}", "a", "s", "src", "T2") for k in range(1, 5)]
+    marked = {"t.py::a": ["TOR-AAA-001"], "t.py::b": ["TOR-AAA-002"],
+              "t.py::c": ["TOR-AAA-003"], "t.py::d": ["TOR-AAA-003", "TOR-AAA-004"],
+              "t.py::e": ["TOR-AAA-004"]}
+    results = {"t.py::a": "failed", "t.py::c": "skipped", "t.py::d": "skipped",
+               "t.py::e": "passed"}
+    assert problems(reqs, marked) == []
+    assert problems(reqs, marked, results) == [
+        "TOR-AAA-001: its traced test t.py::a failed",
+        "TOR-AAA-002: its traced test t.py::b not run",
+        "TOR-AAA-003: every traced test was skipped (2)"]
+    assert problems(reqs, marked, {n: "passed" for n in marked}) == []
