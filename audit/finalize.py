@@ -175,20 +175,24 @@ def _verdict(plan: AuditPlan, r: RequirementPlan, res: ClockPass, bindings: Bind
 
 def judged(plan: AuditPlan, r: RequirementPlan, v: Verdict, ticks: StreamTicks,
            ev: Evidence, ltl3: tuple[str, int | None, int | None],
-           rob: tuple[float, int, int, list[tuple[int, int, float]]]) -> None:
+           rob: tuple[float, int, int, list[tuple[int, int, float]]],
+           held: int | None | str = "row") -> None:
     """Set the verdict ``v`` of ``r`` as :func:`finalize` sets it on a trace without
     unknown ticks or damage, from what was decided over its ``ticks.n`` ticks without
     their columns (:mod:`fretc.audit.streamed`): the interval semantics' evidence ``ev``,
     the LTL3 verdict ``(status, tick, time)`` and the robustness ``(value, tick, time of
     that tick, margin points (tick, time, value))``. The values around a violation
-    (``v.values``, ``v.sources``) are the caller's: at :func:`shown_ticks`."""
+    (``v.values``, ``v.sources``) are the caller's: at :func:`shown_ticks`. ``held``: the
+    log time (ns) of the message held at the robustness's tick (None: none); ``"row"``, a
+    CSV trace's: the tick's own time when not negative."""
     v.engine = "interval"
     v.intervals, v.triggers, v.violations = ev.intervals, ev.triggers, ev.violations
     status, tick, time = ltl3
     v.ltl3 = Ltl3(status, tick, time)
     value, at, at_time, points = rob
-    held = at_time if at_time >= 0 else None
-    _robustness_fields(v, ev.holds, value, TimePoint(at, at_time, held), points)
+    shown = (at_time if at_time >= 0 else None) if held == "row" else held
+    assert not isinstance(shown, str)  # (a CSV row's, or a held log time)
+    _robustness_fields(v, ev.holds, value, TimePoint(at, at_time, shown), points)
     decided(plan, r, v, ev.holds, ev, status, tick, ticks.n, lambda: ticks)
 
 

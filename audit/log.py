@@ -42,7 +42,9 @@ from fretc.audit.operands import operand_values
 from fretc.audit.passes import LogPasses, clock_key, restrict, run_passes
 from fretc.audit.plan import select_variant
 from fretc.audit.streamed import CsvStreams, StreamedResult
-from fretc.audit.streamed_verdict import finalize_streamed, streamed_values
+from fretc.audit.streamed_log import LogStreams
+from fretc.audit.streamed_verdict import (finalize_clock_streamed, finalize_streamed,
+                                          streamed_values)
 from fretc.audit.streamed_three import ThreeResult, finalize_three, judged_three
 from fretc.signals.csv_columns import csv_streamed_pass
 
@@ -398,7 +400,9 @@ class _LogRun:
             names = sorted({v for r in active for v in r.variables})
             b = restrict(self.bindings, names) if self.bindings is not None else None
             try:
-                result = run_passes(plan, source, b, active, progress)
+                result = run_passes(plan, source, b, active, progress, self._log_streams())
+                if result.again:
+                    result = self._read_again(result, b, active)
             except SignalError as exc:
                 culprit = exc.variable
                 hit = [r for r in active if culprit in r.variables] if culprit else []
@@ -424,6 +428,27 @@ class _LogRun:
                 collect_problems(source, self.stream_sampling, self.problems,
                                  self.problem_counts)
         return result, active, b
+
+    def _log_streams(self) -> Callable[[dict], LogStreams] | None:
+        """The clocks judged as the log is read (:mod:`fretc.audit.streamed_log`), or None
+        where every column is kept (``audit_keeping_passes``)."""
+        if not self.stream:
+            return None
+        plan, source = self.plan, self.source
+        assert source is not None  # (open)
+        return lambda groups: LogStreams.of(plan, groups, self.bindings, source)
+
+    def _read_again(self, first: LogPasses, b: Bindings | None,
+                    active: list[RequirementPlan]) -> LogPasses:
+        """The log read a second time: the clocks of ``first.again`` keeping their columns,
+        the others' decided already (sampled again, neither kept nor judged, so that the
+        log's figures are the same read's)."""
+        assert self.source is not None  # (open)
+        decided = frozenset(first.stream_ticks) - first.again
+        result = run_passes(self.plan, self.source, b, active, None,
+                            lambda _groups: LogStreams(discard=decided))
+        result.streamed, result.stream_ticks = first.streamed, first.stream_ticks
+        return result
 
     def _record_source(self) -> None:
         """The log's damage, message counts, problems and span, from its source."""
@@ -458,7 +483,9 @@ class _LogRun:
         for r in active:
             assert result is not None  # (active requirements were read)
             res = by_index[r.index] = passes[clock_key(r, b)]
-            self._clock_figures(r, res, result, b)
+            n = (result.stream_ticks[clock_key(r, b)] if r.index in result.streamed
+                 else len(res.times))
+            self._clock_figures(r, res, result, b, n)
         streamed = self._streamed_figures()
         ok = [r for r in self.plan.requirements
               if (r.index in by_index or r.index in streamed)
@@ -487,6 +514,9 @@ class _LogRun:
                         if isinstance(got, ThreeResult) else
                         finalize_streamed(self.plan, r, got, verdicts[r.index])):
                     violated.append(r)
+            elif result is not None and r.index in result.streamed:
+                finalize_clock_streamed(self.plan, r, result.streamed[r.index],
+                                        verdicts[r.index])
             else:
                 finalize(self.plan, r, by_index[r.index], self.bindings, verdicts[r.index],
                          la)
@@ -515,12 +545,12 @@ class _LogRun:
         return out
 
     def _clock_figures(self, r: RequirementPlan, res, result: LogPasses,
-                       b: Bindings | None) -> bool:
-        """Set the verdict's ticks and times from its clock; False (with the error) when
-        its clock failed or a topic it reads gave nothing."""
+                       b: Bindings | None, n: int) -> bool:
+        """Set the verdict's ticks and times from its clock (``n`` ticks judged); False
+        (with the error) when its clock failed or a topic it reads gave nothing."""
         la, v, key = self.la, self.verdicts[r.index], clock_key(r, b)
         s = res.sampling
-        _tick_figures(v, s, r, len(res.times), b)
+        _tick_figures(v, s, r, n, b)
         if res.cut:  # ticks after the damage are not judged
             v.last_tick_ns = int(res.times[-1]) if len(res.times) else None
             la.ticks_after_damage = max(la.ticks_after_damage, res.cut)

@@ -49,6 +49,13 @@ class LogPasses:
     #: the log's inner gaps judged as unknown ticks, and those bridged (``--bridge-gaps``)
     gaps: list = field(default_factory=list)
     bridged: list = field(default_factory=list)
+    #: requirement index -> what its streams decided as the log was read (its clock's pass
+    #: holds no tick then: :mod:`fretc.audit.streamed_log`)
+    streamed: dict[int, Any] = field(default_factory=dict)
+    #: clock -> its ticks, for the clocks judged as the log was read
+    stream_ticks: dict[ClockKey, int] = field(default_factory=dict)
+    #: clocks to read again keeping their columns (a requirement the streams left undecided)
+    again: set[ClockKey] = field(default_factory=set)
 
 
 def restrict(b: Bindings, names: list[str]) -> Bindings:
@@ -121,9 +128,13 @@ def _progress(source, expected: int | None, progress: Callable[[float], None]
 
 def run_passes(plan: AuditPlan, source: LogSource, bindings: Bindings | None,
                active: list[RequirementPlan],
-               progress: Callable[[float], None] | None) -> LogPasses:
+               progress: Callable[[float], None] | None,
+               streams: Callable[[dict[ClockKey, list[RequirementPlan]]], Any] | None = None
+               ) -> LogPasses:
     """Read the log once: sample every clock of ``active``, keep the columns, then cut each
-    clock at the damage.
+    clock at the damage. ``streams``: given the clocks and their requirements, the clocks
+    judged as they are read instead (a :class:`fretc.audit.streamed_log.LogStreams`: its
+    ``take`` and ``close``).
 
     Raises:
         SignalError: a signal cannot be computed (the variable is named), or more than
@@ -134,6 +145,7 @@ def run_passes(plan: AuditPlan, source: LogSource, bindings: Bindings | None,
     for r in active:
         groups.setdefault(clock_key(r, bindings), []).append(r)
     clocks = {key: _Clock(key, rs, bindings) for key, rs in groups.items()}
+    judged = streams(groups) if streams is not None else None
     stream: Iterator[tuple[Any, Any]]  # (clock key, TickBlock)
     #: clock key -> (times, columns, log times) read whole, not block by block
     finished: dict[ClockKey, tuple[np.ndarray, dict, dict]] = {}
@@ -163,7 +175,8 @@ def run_passes(plan: AuditPlan, source: LogSource, bindings: Bindings | None,
     report = _progress(source, expected, progress) if progress is not None else None
     count = 0
     for key, block in stream:
-        clocks[key].columns.append_block(block)
+        if judged is None or not judged.take(key, block, clocks[key].columns):
+            clocks[key].columns.append_block(block)
         count += len(block.times)
         if count > MAX_TICKS:
             raise SignalError(f"{source.path}: more than {MAX_TICKS:,} ticks (the limit); "
@@ -183,7 +196,10 @@ def run_passes(plan: AuditPlan, source: LogSource, bindings: Bindings | None,
                                 else [CSV_TOPIC]))
         if source.kind == "csv":
             csv_marks(res, source, clock.names, bindings)
-    return LogPasses(sampling, passes, failed, errors, gaps, bridged)
+    out = LogPasses(sampling, passes, failed, errors, gaps, bridged)
+    if judged is not None:
+        out.streamed, out.stream_ticks, out.again = judged.close(source, gaps)
+    return out
 
 
 def csv_marks(res: ClockPass, source: LogSource, names: list[str],

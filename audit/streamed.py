@@ -73,7 +73,8 @@ UNKNOWN_CELLS = "unknown cells in "
 GAP_ROW = "a gap row"
 
 __all__ = ["ENABLED", "NAN_REASON", "UNKNOWN_CELLS", "GAP_ROW", "StreamedResult", "CsvStreams",
-           "unstreamed_reason", "values_around"]
+           "unstreamed_reason", "values_around", "RequirementStreams", "streams_of",
+           "feed_streams"]
 
 #: Whether CSV traces are judged while read (tests set it False to compare the two judges).
 ENABLED = True
@@ -101,8 +102,9 @@ class StreamedResult:
 
 
 @dataclass
-class _Streams:
-    """One requirement's streams while the trace is read."""
+class RequirementStreams:
+    """One requirement's streams while its trace (a CSV trace's rows, a clock's ticks) is
+    read."""
 
     r: RequirementPlan
     names: tuple[str, ...]
@@ -139,7 +141,7 @@ def unstreamed_reason(plan: AuditPlan, r: RequirementPlan) -> str | None:
     return None
 
 
-def _streams_of(r: RequirementPlan) -> _Streams | str:
+def streams_of(r: RequirementPlan) -> RequirementStreams | str:
     """The streams of ``r`` (taken by :func:`unstreamed_reason`), or why one cannot be made
     (an automaton without tables, a bounded window longer than a robustness chunk)."""
     req, f = r.requirement, r.formalization
@@ -150,8 +152,7 @@ def _streams_of(r: RequirementPlan) -> _Streams | str:
         ltl3 = None if r.offline else Ltl3Stream(r.monitor_source)
     except (EvidenceUnsupported, VectorizeError) as exc:
         return str(exc)
-    return _Streams(r, tuple(r.variables), compared_exprs(req), interval,
-                    rob, ltl3)
+    return RequirementStreams(r, tuple(r.variables), compared_exprs(req), interval, rob, ltl3)
 
 
 @dataclass
@@ -162,7 +163,7 @@ class CsvStreams:
     Build it with :meth:`of`; after the read, :meth:`close` says which requirements the
     streams decided (:attr:`results`) and which must be judged whole (:attr:`whole`)."""
 
-    streams: list[_Streams]
+    streams: list[RequirementStreams]
     n: int = 0
     first_time: int | None = None
     last_time: int | None = None
@@ -184,8 +185,8 @@ class CsvStreams:
         streams = []
         for r in candidates:
             if unstreamed_reason(plan, r) is None:
-                got = _streams_of(r)
-                if isinstance(got, _Streams):
+                got = streams_of(r)
+                if isinstance(got, RequirementStreams):
                     streams.append(got)
         return cls(streams)
 
@@ -211,7 +212,7 @@ class CsvStreams:
         self.n = first + k
         for s in self.streams:
             if s.gave_up is None:
-                _feed(s, columns, k, times, first)
+                feed_streams(s, columns, k, times, first)
             elif s.gave_up == NAN_REASON:
                 _nan_range(s, columns, k, first)
 
@@ -241,11 +242,12 @@ class CsvStreams:
         self.streams = []
 
 
-def _feed(s: _Streams, columns: Mapping[str, np.ndarray], k: int, times: np.ndarray,
-          first: int) -> None:
-    """Feed one chunk of ``k`` rows (the trace's rows ``first ..``) to the streams of ``s``;
-    a chunk where a comparison reads NaN (unknown ticks: the three-valued judge's) or a
-    column is missing gives up."""
+def feed_streams(s: RequirementStreams, columns: Mapping[str, np.ndarray], k: int,
+                 times: np.ndarray, first: int) -> None:
+    """Feed one chunk of ``k`` ticks (the trace's ticks ``first ..``; ``columns`` variable
+    -> at least ``k`` values, ``times`` int64 ns) to the streams of ``s``; a chunk where a
+    comparison reads NaN (unknown ticks: the three-valued judge's) or a column is missing
+    gives up (``s.gave_up`` says why)."""
     try:
         cols = {n: columns[n] for n in s.names}
     except KeyError as exc:
@@ -262,7 +264,7 @@ def _feed(s: _Streams, columns: Mapping[str, np.ndarray], k: int, times: np.ndar
         s.ltl3.feed(cols, k, times)
 
 
-def _nan_range(s: _Streams, columns: Mapping[str, np.ndarray], k: int, first: int) -> None:
+def _nan_range(s: RequirementStreams, columns: Mapping[str, np.ndarray], k: int, first: int) -> None:
     """Widen ``s.nan_range`` by the chunk's ticks at which a comparison of ``s`` reads NaN."""
     at = np.flatnonzero(nan_ticks_of(s.exprs, {n: columns[n] for n in s.names}, k))
     if len(at):

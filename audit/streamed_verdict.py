@@ -13,11 +13,12 @@ from fretc.audit.finalize import judged, shown_ticks, StreamTicks
 from fretc.audit.streamed import StreamedResult, values_around
 
 if TYPE_CHECKING:
+    from fretc.audit.streamed_log import ClockResult
     from fretc.audit.streamed_three import ThreeResult
     from fretc.audit.model import AuditPlan, RequirementPlan
     from fretc.audit.verdict import Verdict
 
-__all__ = ["finalize_streamed", "streamed_values"]
+__all__ = ["finalize_streamed", "finalize_clock_streamed", "streamed_values"]
 
 
 def finalize_streamed(plan: AuditPlan, r: RequirementPlan, got: StreamedResult,
@@ -33,6 +34,17 @@ def finalize_streamed(plan: AuditPlan, r: RequirementPlan, got: StreamedResult,
     judged(plan, r, v, ticks, got.evidence, (status, tick, time),
            (rob.value, rob.tick, rob.tick_time, rob.points))
     return v.verdict == "violated"
+
+
+def finalize_clock_streamed(plan: AuditPlan, r: RequirementPlan, got: ClockResult,
+                            v: Verdict) -> None:
+    """Set the verdict ``v`` of requirement ``r`` from what its streams decided as its
+    clock was read (:mod:`fretc.audit.streamed_log`: a verdict that holds, on a clock without
+    damage, gaps or unknown ticks), as :func:`fretc.audit.finalize.finalize` sets it from
+    the clock's columns; the robustness's tick with the log time its topics held there."""
+    res, rob = got.result, got.result.robustness
+    judged(plan, r, v, StreamTicks(res.times, res.n, res.last_time), res.evidence, res.ltl3,
+           (rob.value, rob.tick, rob.tick_time, rob.points), held=got.held)
 
 
 def streamed_values(plan: AuditPlan, source: CsvSource, violated: list[RequirementPlan],

@@ -1,0 +1,215 @@
+"""A log's clocks judged as they are read (:class:`LogStreams`): a clock keeps its columns
+for its first :data:`KEEP_TICKS` ticks; past them its requirements' streams
+(:class:`fretc.audit.streamed.RequirementStreams`) are fed each block of ticks and the columns
+are dropped. ARCHITECTURE.md ("stream") and docs/guide/audits.md say which requirements are
+taken and when a clock is read again keeping its columns.
+"""
+
+from __future__ import annotations
+
+from collections import deque
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from fretc.audit.columns import TickColumns
+from fretc.audit.gaps import gaps_of_clock
+from fretc.audit.streamed import (RequirementStreams, StreamedResult, feed_streams,
+                                  streams_of, unstreamed_reason)
+from fretc.monitors.robustness import ROBUSTNESS_CHUNK
+
+if TYPE_CHECKING:
+    from fretc.audit.model import AuditPlan, RequirementPlan
+    from fretc.audit.passes import ClockKey
+    from fretc.logs.base import LogSource
+    from fretc.signals.bindings import Bindings
+    from fretc.signals.blocks import TickBlock
+
+__all__ = ["KEEP_TICKS", "ClockResult", "LogStreams"]
+
+#: Ticks a clock keeps as columns before its requirements are judged as the log is read
+#: (a log this short is judged whole, as one chunk; tests set it to 0 to stream every tick).
+KEEP_TICKS = 1 << 16
+
+
+@dataclass
+class ClockResult:
+    """What the streams of one requirement decided over its clock's ``result.n`` ticks.
+
+    Attributes:
+        result: the interval verdict and evidence, LTL3 verdict and robustness
+            (:class:`fretc.audit.streamed.StreamedResult`).
+        held: the log time (ns) of the newest message the clock's topics held at the
+            robustness's tick (None: none held), the ``robustness_at`` of the audit JSON.
+    """
+
+    result: StreamedResult
+    held: int | None
+
+
+class _Clock:
+    """One clock's streams: the held log times of its last ticks (the robustness's tick is
+    at most one robustness block behind the ticks fed) and what each requirement decided."""
+
+    def __init__(self, topics: list[str], streams: list[RequirementStreams]) -> None:
+        self.topics = topics
+        self.streams = streams
+        self.n = 0
+        self.first_time: int | None = None
+        self.last_time: int | None = None
+        self.held0: int | None = None
+        self._held: deque[tuple[int, np.ndarray]] = deque()
+        #: requirement index -> (robustness tick, held log time there)
+        self.rob_held: dict[int, tuple[int, int | None]] = {}
+
+    def feed(self, times: np.ndarray, values: dict[str, np.ndarray],
+             log_times: dict[str, np.ndarray]) -> None:
+        """The clock's next ``len(times)`` ticks (values and held log times by topic)."""
+        k = len(times)
+        if k == 0:
+            return
+        held = np.full(k, -1, np.int64)
+        for t in self.topics:
+            lt = log_times.get(t)
+            if lt is not None:
+                np.maximum(held, lt[:k], out=held)
+        first = self.n
+        if self.first_time is None:
+            self.first_time = int(times[0])
+            self.held0 = int(held[0]) if held[0] >= 0 else None
+        self.last_time = int(times[-1])
+        self._held.append((first, held))
+        self.n = first + k
+        for s in self.streams:
+            if s.gave_up is None:
+                feed_streams(s, values, k, times, first)
+                self._note_rob(s)
+        while self._held and self._held[0][0] + len(self._held[0][1]) < self.n - ROBUSTNESS_CHUNK:
+            self._held.popleft()
+
+    def _note_rob(self, s: RequirementStreams) -> None:
+        """Keep the held log time at ``s``'s robustness tick when it moved."""
+        if s.gave_up is not None or s.rob is None:
+            return
+        t = s.rob.tick
+        if t is None or self.rob_held.get(s.r.index, (None,))[0] == t:
+            return
+        if t == 0:
+            self.rob_held[s.r.index] = (0, self.held0)
+            return
+        for start, held in self._held:
+            if start <= t < start + len(held):
+                self.rob_held[s.r.index] = (t, int(held[t - start]) if held[t - start] >= 0
+                                            else None)
+                return
+        s.gave_up = "the robustness's tick is no longer held"
+
+    def close(self, whole: str | None) -> tuple[dict[int, ClockResult], list[int]]:
+        """The results of the requirements the streams decided, and the indexes of those
+        judged over the columns after all (``whole``: a reason that takes every one)."""
+        out: dict[int, ClockResult] = {}
+        again: list[int] = []
+        for s in self.streams:
+            i = s.r.index
+            if whole is not None or s.gave_up is not None or self.n == 0:
+                again.append(i)
+                continue
+            ev, times = s.interval.finish()
+            rob = s.rob.finish()
+            self._note_rob(s)
+            if s.gave_up is not None or not ev.holds:
+                # (a violation's evidence shows its values around the first violation:
+                # judged over the columns of a second read)
+                again.append(i)
+                continue
+            ltl3 = s.ltl3.finish() if s.ltl3 is not None else ("unknown", None, None)
+            assert self.last_time is not None  # (n ticks)
+            out[i] = ClockResult(StreamedResult(ev, times, ltl3, rob, self.n, self.last_time),
+                                 self.rob_held[i][1])
+        self.streams = []
+        self._held.clear()
+        return out, again
+
+
+class LogStreams:
+    """The clocks of one read of a log (:func:`fretc.audit.passes.run_passes`) judged as
+    they are read: a clock keeps :data:`KEEP_TICKS` ticks as columns; past them, when the
+    streams take every requirement of it, it feeds them those ticks and every later block.
+    ``groups``: clock -> its requirements (none: no clock streamed); ``discard``: clocks
+    decided by an earlier read, sampled again (so that the log's figures are those of the
+    same read) but neither kept nor judged."""
+
+    def __init__(self, plan: AuditPlan | None = None,
+                 groups: dict[ClockKey, list[RequirementPlan]] | None = None,
+                 discard: frozenset = frozenset()) -> None:
+        self.plan = plan
+        self.groups = groups or {}
+        self.discard = discard
+        self.keep = KEEP_TICKS
+        self.clocks: dict[ClockKey, _Clock] = {}
+        self._refused: set[ClockKey] = set()  # clocks some requirement of is judged whole
+
+    @classmethod
+    def of(cls, plan: AuditPlan, groups: dict[ClockKey, list[RequirementPlan]],
+           bindings: Bindings | None, source: LogSource) -> LogStreams:
+        """The clocks of ``groups`` (clock -> its requirements) that may be judged as read:
+        with bindings, comparisons with NaN unknown (fretc's rule), not a CSV trace (whose
+        rows :mod:`fretc.audit.streamed` streams)."""
+        if bindings is None or source.kind == "csv" or bindings.tick.nan == "false":
+            return cls()
+        return cls(plan, groups)
+
+    def _clock(self, key: ClockKey) -> _Clock | None:
+        """The streams of clock ``key``, made when it first passes :attr:`keep` ticks (None:
+        a requirement of it the streams do not take,
+        :func:`fretc.audit.streamed.unstreamed_reason`)."""
+        if key in self._refused or self.plan is None or key not in self.groups:
+            return None
+        made = [streams_of(r) if unstreamed_reason(self.plan, r) is None else ""
+                for r in self.groups[key]]
+        if not all(isinstance(m, RequirementStreams) for m in made):
+            self._refused.add(key)
+            return None
+        c = self.clocks[key] = _Clock(sorted(key.topics), [m for m in made if isinstance(
+            m, RequirementStreams)])
+        return c
+
+    def take(self, key: ClockKey, block: TickBlock, columns: TickColumns) -> bool:
+        """Whether the block of clock ``key`` is taken here (else its columns keep it):
+        discarded, or fed to the clock's streams (its ``columns`` so far fed first and
+        emptied, once it passes :attr:`keep` ticks)."""
+        if key in self.discard:
+            return True
+        c = self.clocks.get(key)
+        if c is None:
+            if columns.n + len(block.times) <= self.keep:
+                return False
+            c = self._clock(key)
+            if c is None:
+                return False
+            times, cols, lts = columns.finish()
+            columns.n = 0
+            c.feed(times, cols, lts)
+        c.feed(block.times, block.values, block.log_times)
+        return True
+
+    def close(self, source: LogSource, gaps: list
+              ) -> tuple[dict[int, ClockResult], dict[ClockKey, int], set[ClockKey]]:
+        """After the read: the results by requirement index, the ticks of each clock judged
+        as read, and the clocks to read again keeping their columns (a requirement the
+        streams gave up, a violation, the log's damage or a gap of the clock's topics:
+        judged whole, as every log was)."""
+        results: dict[int, ClockResult] = {}
+        ticks: dict[ClockKey, int] = {}
+        again: set[ClockKey] = set()
+        damaged = getattr(source, "cut_start", None) is not None
+        for key, c in self.clocks.items():
+            whole = ("damage" if damaged else "a gap" if gaps_of_clock(gaps, key.topics)
+                     else None)
+            got, back = c.close(whole)
+            results.update(got)
+            ticks[key] = c.n
+            if back:
+                again.add(key)
+        return results, ticks, again

@@ -1,0 +1,155 @@
+"""A log's clocks judged as they are read (audit/streamed_log.py): past ``KEEP_TICKS`` ticks
+a clock's requirements are fed its blocks of ticks and its columns dropped.
+
+* Metamorphic: on every log the tests have (the cases of tests/audit/_metamorphic.py: the
+  shipped runs, the real logs, the foreign bags, MCAP and ULog files; a damaged copy of a
+  shipped run), streaming from tick 0, from tick 1 or past a few dozen ticks gives the audit
+  JSON of the whole clock judged as one chunk, byte for byte;
+* memory: the audit of a long MCAP log does not grow with its ticks (the growth of the
+  traced peak between two lengths of the same run, as tests/audit/test_csv_memory.py).
+"""
+
+from __future__ import annotations
+
+import json
+import tracemalloc
+from pathlib import Path
+
+import pytest
+
+import _metamorphic as M
+from _logs import MS, boolean, twist, write_mcap
+from test_metamorphic import ALL, SAMPLE, _case
+
+import fretc.audit.streamed_log as streamed_log
+from fretc.audit import AuditConfig, audit_log, load_plan
+
+ROOT = Path(__file__).resolve().parents[2]
+#: streaming from the first tick, the second, and past a few blocks' worth
+KEEPS = (0, 1, 37)
+
+
+def _audit(fret: Path, log: Path) -> str:
+    plan = load_plan(AuditConfig(requirements=(str(fret),)))
+    return json.dumps(audit_log(plan, str(log)).to_json(), sort_keys=True)
+
+
+def _counted(monkeypatch) -> list[int]:
+    """The requirements the streams decide, counted over the audits that follow."""
+    decided: list[int] = []
+    close = streamed_log.LogStreams.close
+
+    def counting(self, source, gaps):
+        got = close(self, source, gaps)
+        decided.append(len(got[0]))
+        return got
+
+    monkeypatch.setattr(streamed_log.LogStreams, "close", counting)
+    return decided
+
+
+def check_chunks(case: M.Case, tmp: Path, monkeypatch) -> list[int]:
+    """The audit JSON streamed from each of :data:`KEEPS` ticks equals the whole clock's;
+    the requirements the streams decided."""
+    fret = M.write(tmp / "r", case)
+    monkeypatch.setattr(streamed_log, "KEEP_TICKS", 1 << 40)  # (every clock one chunk)
+    whole = _audit(fret, case.log)
+    decided = _counted(monkeypatch)
+    for keep in KEEPS:
+        monkeypatch.setattr(streamed_log, "KEEP_TICKS", keep)
+        assert _audit(fret, case.log) == whole, f"{case.id}: streamed past {keep} ticks"
+    return decided
+
+
+@pytest.mark.parametrize("case", SAMPLE)
+@pytest.mark.tor("TOR-TCK-001")
+def test_a_log_streamed_in_chunks_gives_the_whole_clocks_audit(case, tmp_path, monkeypatch):
+    check_chunks(_case(case), tmp_path, monkeypatch)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("case", ALL)
+def test_a_log_streamed_in_chunks_gives_the_whole_clocks_audit_on_every_log(
+        case, tmp_path, monkeypatch):
+    check_chunks(_case(case), tmp_path, monkeypatch)
+
+
+def test_the_shipped_runs_are_streamed_and_judged_alike(tmp_path, monkeypatch):
+    """Every shipped run: the same JSON; the satisfied and vacuous requirements of a sound
+    run decided by the streams (a violated one is judged over its columns, read again); a
+    damaged copy (a chunk failing its CRC) judged over its columns, the same JSON."""
+    total = 0
+    for case in M.shipped_cases():
+        total += sum(check_chunks(case, tmp_path / case.log.stem, monkeypatch))
+    assert total > 0
+    case = M.shipped_cases()[0]
+    bad = tmp_path / "bad.mcap"
+    if M.corrupt_chunk(M.rechunked(case.log, tmp_path / "re.mcap"), bad, 0.5) is None:
+        pytest.skip("too few chunks")
+    check_chunks(M.Case(case.id, bad, case.fret, case.bindings), tmp_path / "bad", monkeypatch)
+
+
+# --------------------------------------------------------------------------- memory
+REQUIREMENTS = """\
+R1: the robot shall always satisfy speed <= 0.5
+R2: upon blocked the robot shall within 200 ticks satisfy stopped
+"""
+BINDINGS = """\
+[tick]
+period = "1 ms"
+[variables]
+speed = "abs(/cmd_vel.linear.x)"
+stopped = "abs(/cmd_vel.linear.x) < 0.01"
+blocked = "/blocked.data"
+"""
+#: The growth allowed a tick when clocks are judged as they are read: none but noise.
+BYTES_PER_TICK = 1
+#: The whole clock's columns: the times, two held log times, a number and two booleans.
+WHOLE_BYTES_PER_TICK = 20
+
+
+def _write_run(path: Path, ticks: int) -> None:
+    """A run of ``ticks`` ticks of 1 ms: ``/cmd_vel`` every 10 ms (stopped for 300 ms of
+    every 1000 ms), ``/blocked`` true at the start of each stop (both requirements hold)."""
+    msgs = []
+    for k in range(ticks // 10 + 1):
+        t = k * 10 * MS
+        phase = k % 100
+        msgs.append(("/cmd_vel", "geometry_msgs/msg/Twist", t,
+                     twist(0.0 if phase < 30 else 0.2 + 0.001 * (k % 50))))
+        if phase in (0, 1):
+            msgs.append(("/blocked", "std_msgs/msg/Bool", t + 1, boolean(phase == 0)))
+    write_mcap(path, msgs, chunk_size=64 * 1024)  # (many chunks, in both lengths)
+
+
+def _peak(plan, path: Path) -> int:
+    tracemalloc.start()
+    try:
+        la = audit_log(plan, str(path))
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert [v.verdict for v in la.verdicts] == ["satisfied", "satisfied"], la.verdicts
+    return peak
+
+
+@pytest.mark.tor("TOR-TCK-001")
+def test_the_audit_of_a_long_mcap_does_not_grow_with_its_ticks(tmp_path):
+    (tmp_path / "r.fret").write_text(REQUIREMENTS)
+    (tmp_path / "r.bindings.toml").write_text(BINDINGS)
+    plan = load_plan(AuditConfig(requirements=(str(tmp_path / "r.fret"),)))
+    short, long = 140_000, 420_000  # (both past KEEP_TICKS and a robustness block)
+    _write_run(tmp_path / "short.mcap", short)
+    _write_run(tmp_path / "long.mcap", long)
+    _peak(plan, tmp_path / "short.mcap")  # caches filled, as for the runs
+
+    def growth() -> float:
+        return (_peak(plan, tmp_path / "long.mcap")
+                - _peak(plan, tmp_path / "short.mcap")) / (long - short)
+
+    streamed = growth()
+    assert streamed <= BYTES_PER_TICK, f"{streamed:.1f} bytes a tick"
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(streamed_log, "KEEP_TICKS", 1 << 40)  # (every clock kept whole)
+        whole = growth()
+    assert whole >= WHOLE_BYTES_PER_TICK, f"the whole clock: {whole:.1f} bytes a tick"
