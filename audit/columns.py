@@ -11,6 +11,7 @@ trace's rows) keeps no column of its own: its column is the times' array.
 
 from __future__ import annotations
 
+from collections.abc import Iterator
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
@@ -23,6 +24,8 @@ __all__ = ["CHUNK", "TickColumns", "column_array", "ClockPass"]
 
 #: Ticks per column chunk.
 CHUNK = 4096
+#: a block :meth:`TickColumns.drain` gave, released
+_RELEASED = np.zeros(0, np.int64)
 
 
 class TickColumns:
@@ -58,6 +61,23 @@ class TickColumns:
             chunks.append(lt)
         self._tchunks.append(block.times)
         self.n += k
+
+    def drain(self) -> Iterator[tuple[np.ndarray, dict[str, np.ndarray],
+                                      dict[str, np.ndarray]]]:
+        """The blocks kept, in order, as (times, variable -> values, topic -> held log
+        times), each released once given; the columns are then empty."""
+        for i, times in enumerate(self._tchunks):
+            yield (times, {n: c[i] for n, c in zip(self.names, self._vchunks)},
+                   {t: times if same else c[i]
+                    for t, c, same in zip(self.topics, self._lchunks, self._same)})
+            for c in (self._tchunks, *self._vchunks, *self._lchunks):
+                if i < len(c):
+                    c[i] = _RELEASED
+        self.n = 0
+        self._tchunks = []
+        self._vchunks = [[] for _ in self.names]
+        self._lchunks = [[] for _ in self.topics]
+        self._same = [True for _ in self.topics]
 
     def finish(self) -> tuple[np.ndarray, dict[str, np.ndarray], dict[str, np.ndarray]]:
         """(times, variable -> values, topic -> held log times), each of length ``n``.

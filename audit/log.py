@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import os
 from collections.abc import Callable, Iterable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING, Any
 
 from fretc.signals.bindings import Bindings
@@ -42,7 +42,7 @@ from fretc.audit.operands import operand_values
 from fretc.audit.passes import LogPasses, clock_key, restrict, run_passes
 from fretc.audit.plan import select_variant
 from fretc.audit.streamed import CsvStreams, StreamedResult
-from fretc.audit.streamed_log import LogStreams
+from fretc.audit.streamed_log import LogStreams, picked_times
 from fretc.audit.streamed_verdict import (finalize_clock_streamed, finalize_streamed,
                                           streamed_values)
 from fretc.audit.streamed_three import ThreeResult, finalize_three, judged_three
@@ -401,7 +401,8 @@ class _LogRun:
             b = restrict(self.bindings, names) if self.bindings is not None else None
             try:
                 result = run_passes(plan, source, b, active, progress, self._log_streams())
-                if result.again:
+                got = result.streamed
+                if got is not None and (got.again or got.pick):
                     result = self._read_again(result, b, active)
             except SignalError as exc:
                 culprit = exc.variable
@@ -440,14 +441,17 @@ class _LogRun:
 
     def _read_again(self, first: LogPasses, b: Bindings | None,
                     active: list[RequirementPlan]) -> LogPasses:
-        """The log read a second time: the clocks of ``first.again`` keeping their columns,
+        """The log read a second time: the clocks of ``first.streamed.again`` keeping their
+        columns, the ticks a violation's evidence shows kept of the clocks of its ``pick``,
         the others' decided already (sampled again, neither kept nor judged, so that the
         log's figures are the same read's)."""
-        assert self.source is not None  # (open)
-        decided = frozenset(first.stream_ticks) - first.again
-        result = run_passes(self.plan, self.source, b, active, None,
-                            lambda _groups: LogStreams(discard=decided))
-        result.streamed, result.stream_ticks = first.streamed, first.stream_ticks
+        assert self.source is not None and first.streamed is not None  # (streamed)
+        got = first.streamed
+        decided = frozenset(got.ticks) - got.again - set(got.pick)
+        again = LogStreams(discard=decided, pick=got.pick)
+        result = run_passes(self.plan, self.source, b, active, None, lambda _groups: again)
+        got.picked = again.picked
+        result.streamed = got
         return result
 
     def _record_source(self) -> None:
@@ -483,8 +487,11 @@ class _LogRun:
         for r in active:
             assert result is not None  # (active requirements were read)
             res = by_index[r.index] = passes[clock_key(r, b)]
-            n = (result.stream_ticks[clock_key(r, b)] if r.index in result.streamed
-                 else len(res.times))
+            got = result.streamed.results.get(r.index) if result.streamed else None
+            n = got.result.n if got is not None else len(res.times)
+            if got is not None and got.wanted:  # (the operands' read: the ticks' times)
+                by_index[r.index] = replace(res, times=picked_times(
+                    n, result.streamed.picked[clock_key(r, b)]))
             self._clock_figures(r, res, result, b, n)
         streamed = self._streamed_figures()
         ok = [r for r in self.plan.requirements
@@ -514,9 +521,11 @@ class _LogRun:
                         if isinstance(got, ThreeResult) else
                         finalize_streamed(self.plan, r, got, verdicts[r.index])):
                     violated.append(r)
-            elif result is not None and r.index in result.streamed:
-                finalize_clock_streamed(self.plan, r, result.streamed[r.index],
-                                        verdicts[r.index])
+            elif result is not None and result.streamed and r.index in result.streamed.results:
+                key = clock_key(r, b)
+                finalize_clock_streamed(self.plan, r, result.streamed.results[r.index],
+                                        verdicts[r.index], result.streamed.picked.get(key),
+                                        self.bindings)
             else:
                 finalize(self.plan, r, by_index[r.index], self.bindings, verdicts[r.index],
                          la)

@@ -49,13 +49,9 @@ class LogPasses:
     #: the log's inner gaps judged as unknown ticks, and those bridged (``--bridge-gaps``)
     gaps: list = field(default_factory=list)
     bridged: list = field(default_factory=list)
-    #: requirement index -> what its streams decided as the log was read (its clock's pass
-    #: holds no tick then: :mod:`fretc.audit.streamed_log`)
-    streamed: dict[int, Any] = field(default_factory=dict)
-    #: clock -> its ticks, for the clocks judged as the log was read
-    stream_ticks: dict[ClockKey, int] = field(default_factory=dict)
-    #: clocks to read again keeping their columns (a requirement the streams left undecided)
-    again: set[ClockKey] = field(default_factory=set)
+    #: what the streams decided as the log was read (:class:`fretc.audit.streamed_log.
+    #: Closed`; a clock judged so holds no tick in :attr:`passes`), or None
+    streamed: Any = None
 
 
 def restrict(b: Bindings, names: list[str]) -> Bindings:
@@ -198,7 +194,7 @@ def run_passes(plan: AuditPlan, source: LogSource, bindings: Bindings | None,
             csv_marks(res, source, clock.names, bindings)
     out = LogPasses(sampling, passes, failed, errors, gaps, bridged)
     if judged is not None:
-        out.streamed, out.stream_ticks, out.again = judged.close(source, gaps)
+        out.streamed = judged.close(source, gaps)
     return out
 
 

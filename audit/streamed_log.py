@@ -1,15 +1,17 @@
 """A log's clocks judged as they are read (:class:`LogStreams`): a clock keeps its columns
 for its first :data:`KEEP_TICKS` ticks; past them its requirements' streams
 (:class:`fretc.audit.streamed.RequirementStreams`) are fed each block of ticks and the columns
-are dropped. ARCHITECTURE.md ("stream") and docs/guide/audits.md say which requirements are
-taken and when a clock is read again keeping its columns.
+are dropped; a violation's evidence is read again, its ticks alone (:class:`Picked`).
+ARCHITECTURE.md ("stream") and docs/guide/audits.md say which requirements are taken and
+when a clock is read again keeping its columns.
 """
 
 from __future__ import annotations
 
 from collections import deque
-from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from collections.abc import Iterator, Mapping
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -17,6 +19,7 @@ from fretc.audit.columns import TickColumns
 from fretc.audit.gaps import gaps_of_clock
 from fretc.audit.streamed import (RequirementStreams, StreamedResult, feed_streams,
                                   streams_of, unstreamed_reason)
+from fretc.monitors.evidence import Evidence
 from fretc.monitors.robustness import ROBUSTNESS_CHUNK
 
 if TYPE_CHECKING:
@@ -26,7 +29,8 @@ if TYPE_CHECKING:
     from fretc.signals.bindings import Bindings
     from fretc.signals.blocks import TickBlock
 
-__all__ = ["KEEP_TICKS", "ClockResult", "LogStreams"]
+__all__ = ["KEEP_TICKS", "ClockResult", "Picked", "Closed", "LogStreams", "wanted_ticks",
+           "picked_times"]
 
 #: Ticks a clock keeps as columns before its requirements are judged as the log is read
 #: (a log this short is judged whole, as one chunk; tests set it to 0 to stream every tick).
@@ -46,6 +50,64 @@ class ClockResult:
 
     result: StreamedResult
     held: int | None
+    #: a violation's: the ticks whose times, held log times and values its evidence shows
+    #: (:func:`wanted_ticks`), read again (:class:`Picked`); empty when it holds
+    wanted: frozenset[int] = frozenset()
+
+
+@dataclass
+class Picked:
+    """Some ticks of a clock read again (a violation's evidence, :func:`wanted_ticks`): tick
+    -> its time (ns), the newest log time its topics held (None: none), topic -> tick -> the
+    held message's log time (-1: none yet), variable -> tick -> value."""
+
+    times: dict[int, int] = field(default_factory=dict)
+    held: dict[int, int | None] = field(default_factory=dict)
+    log_times: dict[str, dict[int, int]] = field(default_factory=dict)
+    values: dict[str, dict[int, Any]] = field(default_factory=dict)
+
+
+class _PickedTimes(Mapping[int, int]):
+    """The times of a clock's ``n`` ticks of which only some were read again: ``len`` is
+    ``n``, an item a tick read (:func:`picked_times`)."""
+
+    def __init__(self, n: int, times: dict[int, int]) -> None:
+        self.n, self.times = n, times
+
+    def __getitem__(self, tick: int) -> int:
+        return self.times[tick]
+
+    def __iter__(self) -> Iterator[int]:
+        return iter(self.times)
+
+    def __len__(self) -> int:
+        return self.n
+
+
+def picked_times(n: int, picked: Picked) -> Any:
+    """The times of a clock of ``n`` ticks as :class:`fretc.audit.columns.ClockPass`'s
+    ``times`` give them to the read of a violation's operands
+    (:func:`fretc.audit.operands.operand_values`: ``len`` and the ticks shown), from the
+    ticks read again (``picked``)."""
+    return _PickedTimes(n, picked.times)
+
+
+def wanted_ticks(ev: Evidence, n: int, window: int) -> frozenset[int] | None:
+    """The ticks (of ``n``) a violation's evidence ``ev`` names (the first violation's
+    trigger, scope interval, window and violation tick, each violation listed) and those
+    within ``window`` of its trigger and violation tick, whose values are shown
+    (:func:`fretc.audit.finalize.shown_ticks`), with the last tick; None without a first
+    violation."""
+    w = ev.violation
+    if w is None:
+        return None
+    named = [w.trigger_tick, *w.interval, *w.window, w.violation_tick]
+    for x in ev.listed:
+        named += [x.trigger_tick, x.violation_tick]
+    out = {min(max(t, 0), n - 1) for t in named} | {n - 1}
+    for c in (w.trigger_tick, min(w.violation_tick, n - 1)):
+        out.update(i for i in range(c - window, c + window + 1) if 0 <= i < n)
+    return frozenset(out)
 
 
 class _Clock:
@@ -105,8 +167,10 @@ class _Clock:
                 return
         s.gave_up = "the robustness's tick is no longer held"
 
-    def close(self, whole: str | None) -> tuple[dict[int, ClockResult], list[int]]:
-        """The results of the requirements the streams decided, and the indexes of those
+    def close(self, whole: str | None, window: int
+              ) -> tuple[dict[int, ClockResult], list[int]]:
+        """The results of the requirements the streams decided (a violation's with the
+        ticks its evidence shows, ``window`` ticks around it), and the indexes of those
         judged over the columns after all (``whole``: a reason that takes every one)."""
         out: dict[int, ClockResult] = {}
         again: list[int] = []
@@ -118,15 +182,14 @@ class _Clock:
             ev, times = s.interval.finish()
             rob = s.rob.finish()
             self._note_rob(s)
-            if s.gave_up is not None or not ev.holds:
-                # (a violation's evidence shows its values around the first violation:
-                # judged over the columns of a second read)
+            wanted = frozenset() if ev.holds else wanted_ticks(ev, self.n, window)
+            if s.gave_up is not None or wanted is None:
                 again.append(i)
                 continue
             ltl3 = s.ltl3.finish() if s.ltl3 is not None else ("unknown", None, None)
             assert self.last_time is not None  # (n ticks)
             out[i] = ClockResult(StreamedResult(ev, times, ltl3, rob, self.n, self.last_time),
-                                 self.rob_held[i][1])
+                                 self.rob_held[i][1], wanted)
         self.streams = []
         self._held.clear()
         return out, again
@@ -138,14 +201,19 @@ class LogStreams:
     streams take every requirement of it, it feeds them those ticks and every later block.
     ``groups``: clock -> its requirements (none: no clock streamed); ``discard``: clocks
     decided by an earlier read, sampled again (so that the log's figures are those of the
-    same read) but neither kept nor judged."""
+    same read) but neither kept nor judged; ``pick``: clocks of which only some ticks are
+    kept (:class:`Picked`: a violation's evidence, read again)."""
 
     def __init__(self, plan: AuditPlan | None = None,
                  groups: dict[ClockKey, list[RequirementPlan]] | None = None,
-                 discard: frozenset = frozenset()) -> None:
+                 discard: frozenset = frozenset(),
+                 pick: dict[ClockKey, frozenset[int]] | None = None) -> None:
         self.plan = plan
         self.groups = groups or {}
         self.discard = discard
+        #: clock -> the ticks to read again (a violation's evidence), and what was read
+        self.pick = pick or {}
+        self.picked: dict[ClockKey, Picked] = {}
         self.keep = KEEP_TICKS
         self.clocks: dict[ClockKey, _Clock] = {}
         self._refused: set[ClockKey] = set()  # clocks some requirement of is judged whole
@@ -181,6 +249,9 @@ class LogStreams:
         emptied, once it passes :attr:`keep` ticks)."""
         if key in self.discard:
             return True
+        if key in self.pick:
+            self._pick(key, block)
+            return True
         c = self.clocks.get(key)
         if c is None:
             if columns.n + len(block.times) <= self.keep:
@@ -188,28 +259,67 @@ class LogStreams:
             c = self._clock(key)
             if c is None:
                 return False
-            times, cols, lts = columns.finish()
-            columns.n = 0
-            c.feed(times, cols, lts)
+            for times, cols, lts in columns.drain():
+                c.feed(times, cols, lts)
         c.feed(block.times, block.values, block.log_times)
         return True
 
-    def close(self, source: LogSource, gaps: list
-              ) -> tuple[dict[int, ClockResult], dict[ClockKey, int], set[ClockKey]]:
-        """After the read: the results by requirement index, the ticks of each clock judged
-        as read, and the clocks to read again keeping their columns (a requirement the
-        streams gave up, a violation, the log's damage or a gap of the clock's topics:
-        judged whole, as every log was)."""
-        results: dict[int, ClockResult] = {}
-        ticks: dict[ClockKey, int] = {}
-        again: set[ClockKey] = set()
+    def _pick(self, key: ClockKey, block: TickBlock) -> None:
+        """Keep the wanted ticks of ``block`` (:attr:`pick`)."""
+        got = self.picked.setdefault(key, Picked())
+        k = len(block.times)
+        for i in sorted(t - block.start for t in self.pick[key]
+                        if block.start <= t < block.start + k):
+            tick = block.start + i
+            got.times[tick] = int(block.times[i])
+            held = -1
+            for t in key.topics:
+                lt = block.log_times.get(t)
+                x = int(lt[i]) if lt is not None else -1
+                got.log_times.setdefault(t, {})[tick] = x
+                held = max(held, x)
+            got.held[tick] = held if held >= 0 else None
+            for name, col in block.values.items():
+                got.values.setdefault(name, {})[tick] = col[i]
+
+    def close(self, source: LogSource, gaps: list) -> Closed:
+        """After the read: what the streams decided (:class:`Closed`). A clock is read
+        again keeping its columns where a requirement of it the streams gave up, or the
+        log's damage or a gap of the clock's topics makes ticks unknown (judged whole, as
+        every log was; its violations then too); a violation's ticks shown are read again
+        (:attr:`Closed.pick`)."""
+        out = Closed(picked=self.picked)
         damaged = getattr(source, "cut_start", None) is not None
         for key, c in self.clocks.items():
             whole = ("damage" if damaged else "a gap" if gaps_of_clock(gaps, key.topics)
                      else None)
-            got, back = c.close(whole)
-            results.update(got)
-            ticks[key] = c.n
+            assert self.plan is not None  # (a clock streamed: made with the plan)
+            got, back = c.close(whole, self.plan.config.window)
+            out.ticks[key] = c.n
             if back:
-                again.add(key)
-        return results, ticks, again
+                out.again.add(key)
+                got = {i: x for i, x in got.items() if not x.wanted}
+            wanted = frozenset().union(*(x.wanted for x in got.values()))
+            if wanted:
+                out.pick[key] = wanted
+            out.results.update(got)
+        return out
+
+
+@dataclass
+class Closed:
+    """What the streams of one read decided.
+
+    Attributes:
+        results: requirement index -> :class:`ClockResult`.
+        ticks: clock -> its ticks, for the clocks judged as read.
+        again: clocks to read again keeping their columns.
+        pick: clock -> the ticks of its violations' evidence to read again.
+        picked: clock -> those ticks, as a read with ``pick`` kept them.
+    """
+
+    results: dict[int, ClockResult] = field(default_factory=dict)
+    ticks: dict[ClockKey, int] = field(default_factory=dict)
+    again: set[ClockKey] = field(default_factory=set)
+    pick: dict[ClockKey, frozenset[int]] = field(default_factory=dict)
+    picked: dict[ClockKey, Picked] = field(default_factory=dict)

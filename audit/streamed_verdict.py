@@ -10,15 +10,18 @@ from typing import TYPE_CHECKING
 
 from fretc.logs import CSV_TOPIC, CsvSource
 from fretc.audit.finalize import judged, shown_ticks, StreamTicks
+from fretc.audit.verdict import TimePoint
+from fretc.monitors.stepwise import to_python
 from fretc.audit.streamed import StreamedResult, values_around
 
 if TYPE_CHECKING:
-    from fretc.audit.streamed_log import ClockResult
+    from fretc.audit.streamed_log import ClockResult, Picked
+    from fretc.signals.bindings import Bindings
     from fretc.audit.streamed_three import ThreeResult
     from fretc.audit.model import AuditPlan, RequirementPlan
     from fretc.audit.verdict import Verdict
 
-__all__ = ["finalize_streamed", "finalize_clock_streamed", "streamed_values"]
+__all__ = ["finalize_streamed", "finalize_clock_streamed", "PickedTicks", "streamed_values"]
 
 
 def finalize_streamed(plan: AuditPlan, r: RequirementPlan, got: StreamedResult,
@@ -36,15 +39,55 @@ def finalize_streamed(plan: AuditPlan, r: RequirementPlan, got: StreamedResult,
     return v.verdict == "violated"
 
 
+class PickedTicks(StreamTicks):
+    """The ticks of a clock judged as its log was read whose evidence was read again
+    (:class:`fretc.audit.streamed_log.Picked`), as :class:`fretc.audit.finalize._Ticks` gives
+    a clock's ticks: each with the log time its topics held; a tick past the last counted
+    on with the bindings' tick period."""
+
+    def __init__(self, n: int, last_time: int, picked: Picked, period_ns: int | None) -> None:
+        super().__init__(picked.times, n, last_time)
+        self.held, self.period_ns = picked.held, period_ns
+
+    def point(self, i: int) -> TimePoint:
+        j = min(max(i, 0), self.n - 1)
+        return TimePoint(int(i), self.times[j], self.held[j])
+
+    def time_at(self, i: int) -> int | None:
+        if 0 <= i < self.n:
+            return self.times[i]
+        if i >= self.n and self.period_ns:
+            return self.times[self.n - 1] + (i - self.n + 1) * self.period_ns
+        return None
+
+
 def finalize_clock_streamed(plan: AuditPlan, r: RequirementPlan, got: ClockResult,
-                            v: Verdict) -> None:
+                            v: Verdict, picked: Picked | None, bindings: Bindings | None
+                            ) -> None:
     """Set the verdict ``v`` of requirement ``r`` from what its streams decided as its
-    clock was read (:mod:`fretc.audit.streamed_log`: a verdict that holds, on a clock without
-    damage, gaps or unknown ticks), as :func:`fretc.audit.finalize.finalize` sets it from
-    the clock's columns; the robustness's tick with the log time its topics held there."""
+    clock was read (:mod:`fretc.audit.streamed_log`: on a clock without damage, gaps or
+    unknown ticks), as :func:`fretc.audit.finalize.finalize` sets it from the clock's
+    columns: the robustness's tick with the log time its topics held there; a violation's
+    evidence and values from the ticks read again (``picked``)."""
     res, rob = got.result, got.result.robustness
-    judged(plan, r, v, StreamTicks(res.times, res.n, res.last_time), res.evidence, res.ltl3,
+    ticks: StreamTicks = StreamTicks(res.times, res.n, res.last_time)
+    if got.wanted:
+        assert picked is not None  # (read again for its wanted ticks)
+        period = bindings.tick.period_ns if bindings is not None else None
+        ticks = PickedTicks(res.n, res.last_time, picked, period)
+    judged(plan, r, v, ticks, res.evidence, res.ltl3,
            (rob.value, rob.tick, rob.tick_time, rob.points), held=got.held)
+    if v.verdict != "violated":
+        return
+    assert picked is not None
+    shown = shown_ticks(plan.config.window, v, res.n)
+    for name in r.variables:
+        col = picked.values.get(name)
+        if col is not None:
+            v.values[name] = [(i, picked.times[i], to_python(col[i])) for i in shown]
+    for t in sorted(picked.log_times):
+        lt = picked.log_times[t]
+        v.sources[t] = [(i, picked.times[i], lt[i] if lt[i] >= 0 else None) for i in shown]
 
 
 def streamed_values(plan: AuditPlan, source: CsvSource, violated: list[RequirementPlan],

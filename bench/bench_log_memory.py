@@ -8,7 +8,8 @@ Writes, in a temporary folder, a synthetic ROS 2 MCAP of each length (``ros2`` p
 (geometry_msgs/msg/Twist) and ``/range`` (std_msgs/msg/Float64) at 10 Hz, ``/sif``
 (std_msgs/msg/Bool) at 1 Hz; every minute an obstacle comes within 0.9 m for 2 s and the
 robot stops 0.3 s after it, so the four requirements (:data:`REQUIREMENTS`, a 100 ms tick)
-hold on every tick and are judged to the last one. Then, in one run:
+hold on every tick and are judged to the last one (``--violation`` adds a fifth, violated at
+every peak of the speed: its evidence is read again). Then, in one run:
 
 1. each log audited in a fresh process (``audit_log`` after the plan is loaded): the peak of
    the Python heap the audit allocated (tracemalloc, numpy's arrays included) and the
@@ -44,6 +45,8 @@ M2: upon too_close the robot shall within 1 second satisfy stopped
 M3: whenever sif_on the robot shall immediately satisfy turn <= 0.5
 M4: the robot shall always satisfy range >= 0.2
 """
+#: with ``--violation``: violated at the speed's every peak (its evidence read again)
+VIOLATED = "M5: the robot shall always satisfy speed <= 0.39\n"
 BINDINGS = """\
 [tick]
 period = "100 ms"
@@ -153,6 +156,8 @@ def main() -> None:
     ap.add_argument("--repeat", type=int, default=3, help="timed runs of each (best kept)")
     ap.add_argument("--no-whole", action="store_true",
                     help="skip the audits keeping every clock's columns")
+    ap.add_argument("--violation", action="store_true",
+                    help="a fifth requirement, violated (module docstring)")
     ap.add_argument("--child", nargs=2, help=argparse.SUPPRESS)
     ap.add_argument("--whole", action="store_true", help=argparse.SUPPRESS)
     args = ap.parse_args()
@@ -162,7 +167,7 @@ def main() -> None:
     with tempfile.TemporaryDirectory(prefix="fretc-log-memory-") as tmp:
         folder = Path(tmp)
         fret = folder / "m.fret"
-        fret.write_text(REQUIREMENTS)
+        fret.write_text(REQUIREMENTS + (VIOLATED if args.violation else ""))
         (folder / "m.bindings.toml").write_text(BINDINGS)
         logs = {}
         for hours in args.hours:
@@ -172,7 +177,8 @@ def main() -> None:
             logs[hours] = path
             print(f"wrote {path.name}: {n} messages, {path.stat().st_size / 1e6:.1f} MB, "
                   f"in {time.perf_counter() - t:.1f} s")
-        print("\npeak memory of a fresh process auditing the log (4 requirements, 100 ms tick):")
+        print(f"\npeak memory of a fresh process auditing the log "
+              f"({5 if args.violation else 4} requirements, 100 ms tick):")
         for hours, path in logs.items():
             for whole in ((False, True) if not args.no_whole else (False,)):
                 m = audit_child(path, fret, whole)

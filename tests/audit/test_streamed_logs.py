@@ -41,7 +41,7 @@ def _counted(monkeypatch) -> list[int]:
 
     def counting(self, source, gaps):
         got = close(self, source, gaps)
-        decided.append(len(got[0]))
+        decided.append(len(got.results))
         return got
 
     monkeypatch.setattr(streamed_log.LogStreams, "close", counting)
@@ -153,3 +153,55 @@ def test_the_audit_of_a_long_mcap_does_not_grow_with_its_ticks(tmp_path):
         mp.setattr(streamed_log, "KEEP_TICKS", 1 << 40)  # (every clock kept whole)
         whole = growth()
     assert whole >= WHOLE_BYTES_PER_TICK, f"the whole clock: {whole:.1f} bytes a tick"
+
+
+def _closed(monkeypatch) -> list:
+    """What the streams decided (:class:`fretc.audit.streamed_log.Closed`), kept over the
+    audits that follow."""
+    out: list = []
+    close = streamed_log.LogStreams.close
+
+    def keeping(self, source, gaps):
+        got = close(self, source, gaps)
+        out.append(got)
+        return got
+
+    monkeypatch.setattr(streamed_log.LogStreams, "close", keeping)
+    return out
+
+
+def test_a_violation_is_decided_as_read_and_its_evidence_read_again(tmp_path, monkeypatch):
+    """A violation on a long log: decided by the streams, the ticks its evidence shows (its
+    trigger, scope, window, violation, the ticks around them) read again, no column kept;
+    sif_disabled.mcap streamed from tick 0, the same JSON as its clocks judged whole."""
+    case = next(c for c in M.shipped_cases() if c.log.name == "sif_disabled.mcap")
+    fret = M.write(tmp_path / "r", case)
+    monkeypatch.setattr(streamed_log, "KEEP_TICKS", 1 << 40)
+    whole = _audit(fret, case.log)
+    closed = _closed(monkeypatch)
+    monkeypatch.setattr(streamed_log, "KEEP_TICKS", 0)
+    assert _audit(fret, case.log) == whole
+    got = closed[0]
+    violated = [r for r in json.loads(whole)["verdicts"] if r["verdict"] == "violated"]
+    assert violated and got.pick and not got.again
+    assert len(got.results) == len(json.loads(whole)["verdicts"])
+    assert all(len(p.times) <= 200 for p in got.picked.values())  # (some ticks, not all)
+
+
+def test_a_clock_the_streams_leave_undecided_is_read_again_keeping_its_columns(
+        tmp_path, monkeypatch):
+    """What still holds a clock's columns on a long log (KP-127): the log's damage, a gap
+    of its topics or a NaN; such a clock is read a second time keeping its columns. A
+    shipped run with a chunk failing its CRC, streamed from tick 0: every clock goes back,
+    the same JSON as its clocks judged whole."""
+    case = M.shipped_cases()[0]
+    bad = tmp_path / "bad.mcap"
+    if M.corrupt_chunk(M.rechunked(case.log, tmp_path / "re.mcap"), bad, 0.5) is None:
+        pytest.skip("too few chunks")
+    fret = M.write(tmp_path / "r", case)
+    monkeypatch.setattr(streamed_log, "KEEP_TICKS", 1 << 40)
+    whole = _audit(fret, bad)
+    closed = _closed(monkeypatch)
+    monkeypatch.setattr(streamed_log, "KEEP_TICKS", 0)
+    assert _audit(fret, bad) == whole
+    assert closed[0].again and not closed[0].results
