@@ -12,6 +12,7 @@ a clock's requirements are fed its blocks of ticks and its columns dropped.
 from __future__ import annotations
 
 import json
+import sys
 import tracemalloc
 from pathlib import Path
 
@@ -87,6 +88,49 @@ def test_the_shipped_runs_are_streamed_and_judged_alike(tmp_path, monkeypatch):
     if M.corrupt_chunk(M.rechunked(case.log, tmp_path / "re.mcap"), bad, 0.5) is None:
         pytest.skip("too few chunks")
     check_chunks(M.Case(case.id, bad, case.fret, case.bindings), tmp_path / "bad", monkeypatch)
+
+
+def _case_of(tmp: Path, log: Path, fret: str, bindings: str) -> M.Case:
+    return M.Case(log.name, log, fret, bindings)
+
+
+def test_a_dataflash_log_and_a_rosbag2_folder_streamed_give_the_whole_clocks_audit(
+        tmp_path, monkeypatch):
+    """The formats the cases above do not hold: an ArduPilot DataFlash log (a violation on
+    a clock of two instances' messages), the same cut short (damage: its clocks read again
+    keeping their columns), and a rosbag2 folder (a violation with its deadline)."""
+    pytest.importorskip("pymavlink")
+    sys.path.insert(0, str(ROOT / "tests" / "logs"))
+    from _dataflash import write_dataflash
+    from test_flight_logs import DF_BINDINGS, DF_FRET, _dataflash_rows
+    from rosbags.rosbag2 import Writer as Rosbag2Writer
+
+    from _logs import ROS2, scan
+
+    log = write_dataflash(tmp_path / "flight.bin", _dataflash_rows())
+    cut = tmp_path / "cut.bin"
+    cut.write_bytes(log.read_bytes()[:-40])
+    for path in (log, cut):
+        check_chunks(_case_of(tmp_path, path, DF_FRET, DF_BINDINGS),
+                     tmp_path / path.stem, monkeypatch)
+    bag = tmp_path / "run_bag"
+    with Rosbag2Writer(bag, version=9) as w:
+        cs = w.add_connection("/scan", "sensor_msgs/msg/LaserScan", typestore=ROS2)
+        cc = w.add_connection("/cmd", "geometry_msgs/msg/Twist", typestore=ROS2)
+        for k in range(60):
+            t = k * 100 * MS
+            w.write(cs, t, ROS2.serialize_cdr(scan([0.3 if k in (10, 40) else 2.0], t),
+                                              "sensor_msgs/msg/LaserScan"))
+            w.write(cc, t, ROS2.serialize_cdr(twist(0.0 if k > 42 else 0.5),
+                                              "geometry_msgs/msg/Twist"))
+    fret = ("@tick_period 100 ms\n"
+            "A1: whenever near the bot shall within 500 milliseconds satisfy halted\n"
+            "A2: the bot shall always satisfy speed <= 1\n")
+    bindings = ('[tick]\nperiod = "100 ms"\n[variables]\nnear = "min(/scan.ranges) < 0.5"\n'
+                'halted = "abs(/cmd.linear.x) < 1e-3"\nspeed = "abs(/cmd.linear.x)"\n')
+    decided = check_chunks(_case_of(tmp_path, bag, fret, bindings), tmp_path / "bag",
+                           monkeypatch)
+    assert sum(decided) > 0
 
 
 # --------------------------------------------------------------------------- memory
