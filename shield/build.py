@@ -23,6 +23,7 @@ from fretc.common.units import format_period_ms
 from fretc.compiler import ir
 from fretc.compiler.ir import Node
 from fretc.compiler.printers import mangle, to_smv
+from fretc.shield.lookback import lookback
 from fretc.shield.machine import Atom, Machine
 from fretc.shield.plan import Component, Plan, ShieldError, enforced_pts, plan
 from fretc.fretish.fret_variables import INTEGER_TYPES, FretVariable
@@ -365,10 +366,12 @@ def _machine(worker: SpotWorker, comp: Component, p: Plan) -> Machine:
         clusters.append({"atoms": index, "variables": list(cl.variables),
                          "numbers": {sum(int(b) << k for k, b in enumerate(key)): nums
                                      for key, nums in sorted(cl.witnesses.items())}})
+    # (the ticks after which a machine that lost its state knows it again: shield.lookback)
+    stats = {**ans["stats"], "lookback": lookback(comp.game_pts)}
     return Machine(tuple(comp.ids), tuple(a for a, i in atoms if i), tuple(outs),
                    tuple(ans["init"]), tuple(tuple(n) for n in ans["nodes"]), ans["safe"],
                    tuple(ans["next"]), tuple(ans["keep"]), ans["env_ok"], ans["ctl_ok"],
-                   tuple(comp.messages), tuple(clusters), ans["stats"], ans["robust"],
+                   tuple(comp.messages), tuple(clusters), stats, ans["robust"],
                    tuple(a.id for a in comp.assumptions), tuple(ans["watch"]), bounds,
                    tuple(tuple(t) for t in comp.twists))
 

@@ -14,7 +14,7 @@ import math
 from typing import Any
 
 from fretc.common.textsafe import python_doc
-from fretc.shield import runtime, runtime_bounds, runtime_values
+from fretc.shield import runtime, runtime_bounds, runtime_lost, runtime_values
 from fretc.shield.build import Shield
 from fretc.shield.message_model import group_atoms, table_of
 
@@ -61,7 +61,8 @@ def tables(shield: Shield) -> dict[str, Any]:
                           "numbers": dict(sorted(c["numbers"].items()))}
                          for c in m.clusters],
             "assumptions": list(m.assumptions), "assumed": list(m.assumed),
-            "bounds": [dict(b) for b in m.bounds], "twists": [list(t) for t in m.twists]})
+            "bounds": [dict(b) for b in m.bounds], "twists": [list(t) for t in m.twists],
+            "lookback": m.stats.get("lookback")})
     return {"name": shield.name, "digest": shield.digest, "inputs": list(shield.inputs),
             "outputs": list(shield.outputs),
             "preferences": [(t, int(v)) for t, v in shield.preferences],
@@ -69,13 +70,15 @@ def tables(shield: Shield) -> dict[str, Any]:
 
 
 def _runtime_body() -> str:
-    """:mod:`fretc.shield.runtime_values`' source, then :mod:`fretc.shield.runtime_bounds`'
-    and :mod:`fretc.shield.runtime`'s, each without its docstring and ``__all__``; the later
-    ones' ``from __future__`` and their imports of the earlier ones left out (the three read
-    as one module)."""
-    values, bounds = runtime_values.__name__, runtime_bounds.__name__
+    """:mod:`fretc.shield.runtime_values`' source, then :mod:`fretc.shield.runtime_bounds`',
+    :mod:`fretc.shield.runtime_lost`'s and :mod:`fretc.shield.runtime`'s, each without its
+    docstring and ``__all__``; the later ones' ``from __future__`` and their imports of the
+    earlier ones left out (the four read as one module)."""
+    values, bounds, lost = (runtime_values.__name__, runtime_bounds.__name__,
+                            runtime_lost.__name__)
     return (_body(runtime_values) + "\n\n" + _body(runtime_bounds, (values,)) + "\n\n"
-            + _body(runtime, (values, bounds)))
+            + _body(runtime_lost, (values,)) + "\n\n"
+            + _body(runtime, (values, bounds, lost)))
 
 
 def _body(module: Any, inlined: tuple[str, ...] | None = None) -> str:

@@ -57,12 +57,18 @@ from fretc.shield.plan import ShieldError
 from fretc.shield.runtime_values import term_variables
 from fretc.signals.bindings.spec import Bindings
 
-__all__ = ["render_ros2", "node_source", "node_margin", "latency_budget", "LATENCY_BUDGET"]
+__all__ = ["render_ros2", "node_source", "node_margin", "latency_budget", "LATENCY_BUDGET",
+           "proposal_timeout", "PROPOSAL_TIMEOUT_TICKS"]
 
 #: the node's latency budget (s) without ``[shield] latency_budget``: about ten times what
 #: bench/bench_ros2.py measures for the node's own work on this machine (p99 3 ms from the
 #: scan's publication to the command's arrival, the node's part about 1.2 ms at p50)
 LATENCY_BUDGET = Fraction(1, 50)
+
+#: the node's proposal timeout without ``[shield] proposal_timeout``, in tick periods: 300 ms
+#: at 100 ms (six periods of a 20 Hz controller, three of a 10 Hz one); a proposal older is
+#: absent and the fallback is published
+PROPOSAL_TIMEOUT_TICKS = 3
 
 
 def node_margin(period: Fraction, budget: Fraction = LATENCY_BUDGET) -> int:
@@ -70,6 +76,29 @@ def node_margin(period: Fraction, budget: Fraction = LATENCY_BUDGET) -> int:
     sampling phase (a whole period) and the latency ``budget`` (s), in ticks of ``period``
     (s), rounded up."""
     return math.ceil((period + budget) / period)
+
+
+def proposal_timeout(bindings_file: str | None) -> Fraction | None:
+    """``[shield] proposal_timeout`` of the binding file (a duration, ``"300 ms"``), else
+    None (the node's default: :data:`PROPOSAL_TIMEOUT_TICKS` tick periods).
+
+    Raises:
+        ShieldError: not a duration, or not positive."""
+    if bindings_file is None:
+        return None
+    text = _shield_table(bindings_file).get("proposal_timeout")
+    if text is None:
+        return None
+    from fretc.common.units import parse_duration
+
+    try:
+        ns = parse_duration(text) if isinstance(text, str) else None
+    except ValueError:
+        ns = None
+    if ns is None or ns <= 0:
+        raise ShieldError(f"{bindings_file}: [shield] proposal_timeout must be a positive "
+                          f"duration (\"300 ms\"), not {text!r}")
+    return Fraction(int(ns), 10**9)
 
 
 def latency_budget(bindings_file: str | None) -> Fraction:
@@ -158,16 +187,19 @@ def _topics(shield: Shield, bindings: Bindings, proposals: dict[str, str]
 def node_source(pkg: str, module: str, bindings_name: str, types: dict[str, str],
                 inputs: list[str], proposals: dict[str, str], outputs: list[str],
                 period_ns: int, tick: str | None, margin: int = 0,
-                budget_ns: int = 0) -> str:
+                budget_ns: int = 0, proposal_timeout_ns: int | None = None) -> str:
     """The node's Python source (module docstring; ``templates/shield_node.py.j2``):
     ``margin`` the ticks early its shield meets each deadline, ``budget_ns`` its latency
-    budget."""
+    budget, ``proposal_timeout_ns`` the age (ns) past which a proposal is absent (default
+    :data:`PROPOSAL_TIMEOUT_TICKS` periods)."""
     from fretc.compiler.codegen import _env  # lazy: Jinja2 only when the form is written
 
+    if proposal_timeout_ns is None:
+        proposal_timeout_ns = PROPOSAL_TIMEOUT_TICKS * period_ns
     return str(_env().get_template("shield_node.py.j2").render(
         pkg=pkg, module=module, bindings_name=bindings_name, types=types, inputs=inputs,
         proposals=proposals, outputs=outputs, period_ns=period_ns, tick=tick, margin=margin,
-        budget_ns=budget_ns))
+        budget_ns=budget_ns, proposal_timeout_ns=proposal_timeout_ns))
 
 
 def render_ros2(shield: Shield, base: str, bindings: Bindings | None,
@@ -214,10 +246,13 @@ def render_ros2(shield: Shield, base: str, bindings: Bindings | None,
     types = {t: known[t] for t in needed}
     _check_types(types, bindings, bindings_file)
     period_ns = int(shield.period * 10**9)
-    deps = sorted({t.split("/")[0] for t in types.values()} | {"diagnostic_msgs", "rclpy"})
+    deps = sorted({t.split("/")[0] for t in types.values()}
+                  | {"diagnostic_msgs", "rclpy", "std_srvs"})
     budget = latency_budget(bindings_file)
+    timeout = proposal_timeout(bindings_file)
     node = node_source(pkg, module, f"{base}.bindings.toml", types, inputs, proposals,
-                       outputs, period_ns, tick, margin, int(budget * 10**9))
+                       outputs, period_ns, tick, margin, int(budget * 10**9),
+                       None if timeout is None else int(timeout * 10**9))
     return {
         f"{pkg}/package.xml": _package_xml(pkg, shield, deps),
         f"{pkg}/setup.py": _setup_py(pkg, base),

@@ -25,6 +25,15 @@ requirements. Each tick:
   decided atoms is an internal error, never sent; the decision returned is the published
   messages', every output bound to them read back (KP-124: a number two outputs write, an
   output no requirement reads);
+* a **proposal older than the timeout** (``proposal_timeout_ns``, the ROS 2 node's
+  ``proposal_timeout``; None: no timeout, as the simulator and ``shield-replay`` read a
+  recording) is absent, whether the controller never sent one or fell silent: every output
+  bound to its topic cannot be read (``Decision.fault``: "proposal ...: no proposal on
+  /cmd_vel for ... ms"), so the shield gives the fallback's values in a message made from the
+  default message, never the last proposal again;
+* :meth:`MessageShield.answer` decides a proposal when it arrives, from the state of the
+  last tick, without moving it (the state advances on ticks only): a host forwards each
+  proposal at the controller's rate;
 * the messages are given in an order in which a reader sampling between two of them (a
   recorder's receipt times, the audit's ticks at another phase) sees, at every point, a
   valuation the shield accepts from the tick's state (:meth:`ShieldRuntime.accepts`: the
@@ -110,8 +119,12 @@ class MessageShield:
     message of the topic's type with default fields."""
 
     def __init__(self, runtime: ShieldRuntime, bindings: Bindings, proposals: dict[str, str],
-                 make: Callable[[str], Any]):
+                 make: Callable[[str], Any], proposal_timeout_ns: int | None = None):
         self.runtime = runtime
+        #: a proposal older than this (ns) is absent (module docstring); None: never
+        self.proposal_timeout_ns = proposal_timeout_ns
+        #: corrected topic -> the time (ns) its last proposal was heard
+        self.proposal_times: dict[str, int] = {}
         self.bindings = bindings
         self.proposals = dict(proposals)
         self.by_proposal = {p: c for c, p in self.proposals.items()}
@@ -152,6 +165,7 @@ class MessageShield:
         corrected = self.by_proposal.get(topic)
         if corrected is not None:
             self.proposed[corrected] = message
+            self.proposal_times[corrected] = time_ns
             if topic not in self.proposal_inputs:
                 return
         if topic in self.state.msgs:
@@ -186,6 +200,7 @@ class MessageShield:
             del proposal[v]  # (an output no requirement reads, not on these topics)
         for v in self.runtime.outputs:
             proposal.setdefault(v, False)
+        proposal.update(self._absent(now_ns))
         before = self.runtime.state
         inputs = self._inputs(now_ns)
         d = self.runtime.step(inputs, proposal)
@@ -217,6 +232,43 @@ class MessageShield:
             raise
         self.published.update(msgs)
         return self._as_published(d, msgs, now_ns), msgs
+
+    def answer(self, now_ns: int) -> tuple[Decision, list[tuple[str, Any]]]:
+        """:meth:`tick`'s decision and messages for the proposals held at ``now_ns`` (one
+        just heard), from the state of the last tick, which it does not move (module
+        docstring): the tick's state advances on ticks only.
+
+        Raises:
+            ShieldInputError: as :meth:`tick` (the state as it was)."""
+        restore = getattr(self.runtime, "restore", None)
+        if restore is None:  # (a shield generated before it: nothing to put back)
+            raise ShieldInputError("this shield cannot decide between ticks (no restore)")
+        before = self.runtime.state
+        try:
+            return self.tick(now_ns)
+        finally:
+            restore(before)
+
+    def _absent(self, now_ns: int) -> dict[str, Any]:
+        """Each output variable bound to a corrected topic whose proposal is absent at
+        ``now_ns`` (none heard, or older than the timeout: module docstring) -> an
+        :class:`Unreadable` saying so; empty without a timeout."""
+        limit = self.proposal_timeout_ns
+        if limit is None:
+            return {}
+        out: dict[str, Any] = {}
+        for topic, source in self.proposals.items():
+            heard = self.proposal_times.get(topic)
+            if heard is not None and now_ns - heard <= limit:
+                continue
+            why = (f"no proposal on {source} yet" if heard is None else
+                   f"no proposal on {source} for {(now_ns - heard) / 1e6:.0f} ms")
+            for v in self.runtime.outputs:
+                b = self.bindings.variables.get(v)
+                if b is not None and topic in b.topics and self._read(v):
+                    out[v] = Unreadable(f"{v}: {why} (proposal timeout "
+                                        f"{limit / 1e6:g} ms: absent)")
+        return out
 
     def _as_published(self, d: Decision, msgs: list[tuple[str, Any]], now_ns: int
                       ) -> Decision:

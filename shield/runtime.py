@@ -51,8 +51,15 @@ infinite number (no actuator takes one) cannot be read. Then:
   a comparison reads). The belief is bounded (:data:`BELIEF_LIMIT` states,
   :data:`CASES_LIMIT` cases a tick); past a bound, or when no outputs are safe in every case
   (a shield without a fallback), the machine no longer knows its state: it gives the
-  fallback's outputs (none without one) at every tick until :meth:`ShieldRuntime.reset`,
-  and ``Decision.fault`` says so;
+  fallback's outputs (none without one), and ``Decision.fault`` says so, until it knows its
+  state again. **A lost state recovers** by itself when the machine's requirements look back
+  a bounded number of ticks ``L`` (the tables' ``"lookback"``,
+  :func:`fretc.shield.lookback.lookback`): beside the lost machine a copy runs from the
+  initial state on the ticks whose inputs it reads (the fallback's outputs, as given), and
+  after ``L + 1`` such ticks in a row its state is the machine's again (``Decision.recovered``
+  names the requirements; an unreadable input starts the count again). Without such a bound
+  (an unbounded ``since``, ``once``, a mode scope) only :meth:`ShieldRuntime.reset` does;
+  ``Decision.fault`` says which;
 * a **proposed output** that cannot be read is replaced, never passed on, and so is every
   output of its message group (they were read from one message that cannot be read: a
   ``driving_forward`` read from ``linear.x = +inf`` is not kept beside the replaced
@@ -79,6 +86,7 @@ import math
 from typing import Any, NamedTuple
 
 from fretc.shield.runtime_bounds import bounded_value, scaled
+from fretc.shield.runtime_lost import lost_decision, recovery_of, settle_lost
 from fretc.shield.runtime_values import (_OPS, Unreadable, _checked, as_message, kinds,
                                          nearest, read_value, term_value, term_variables,
                                          truth)
@@ -127,6 +135,9 @@ class Decision(NamedTuple):
     #: the twists scaled together at this tick, each with its factor (the path's curvature
     #: kept: :mod:`fretc.shield.runtime_bounds`)
     scaled: tuple[str, ...] = ()
+    #: the requirements of the machines that knew their state again at this tick (module
+    #: docstring: a lost state recovers)
+    recovered: tuple[str, ...] = ()
 
 
 def _tester(spec: tuple[str, str | None, Any]) -> Any:
@@ -224,6 +235,13 @@ class _Machine:
         #: bounds, its state is unknown until reset
         self.others: tuple[tuple[int, ...], ...] = ()
         self.lost = False
+        #: the ticks its requirements look back (None: without bound) and, while lost, the
+        #: copy run from the initial state and its readable ticks in a row (module docstring)
+        self.lookback: int | None = t.get("lookback")
+        self.shadow: tuple[int, ...] = self.init
+        self.readable = 0
+        #: this machine's fallback atoms (set by :class:`ShieldRuntime`; None: no fallback)
+        self.fallback_bits: tuple[int, ...] | None = None
         #: the input atoms that read each input variable
         self.reading_in = {v: [j for j, s in enumerate(self.ins)
                                if (v in term_variables(s[2]) if s[1] == "pred" else s[0] == v)]
@@ -413,11 +431,12 @@ class _Machine:
         in every case."""
         self.faults, self.scaled = [], []
         if self.lost:
-            return self._lost(fallback, proposed, "its state is unknown since an earlier "
-                              "tick (reset the shield)")
+            return lost_decision(self, fallback, proposed, "its state is unknown since an "
+                                 "earlier tick (" + recovery_of(self) + ")")
         cases = [(st, i) for i in self.input_cases(inputs, unread) for st in self.belief]
         if len(cases) > CASES_LIMIT:
-            return self._lost(fallback, proposed, f"more than {CASES_LIMIT} cases to decide")
+            return lost_decision(self, fallback, proposed,
+                                 f"more than {CASES_LIMIT} cases to decide")
         unk = frozenset([*(j for v in unknown for j in self.reading.get(v, ())),
                          *(j for j, reads in self.bound_reads.items() if reads & unread)])
         both = self._both(inputs, proposed)
@@ -439,8 +458,8 @@ class _Machine:
                 candidates.append(tuple(fallback[0]))
             good = [c for c in candidates if safe_in_all(c)]
             if not good:
-                return self._lost(fallback, proposed, "no outputs are safe for every value "
-                                  "the unreadable input could have had")
+                return lost_decision(self, fallback, proposed, "no outputs are safe for every "
+                                     "value the unreadable input could have had")
             outs = min(good, key=lambda c: (sum(self._cost(j, c[j], prop, unk)
                                                 for j in range(len(c))), good.index(c)))
             changed = tuple(t for j, (t, p, o) in enumerate(zip(self.texts, prop, outs))
@@ -458,35 +477,13 @@ class _Machine:
         values = self._one_message(values, outs, proposed, replaced)
         nexts = sorted({self.move(i, outs, st)[1] for st, i in cases})
         if len(nexts) > BELIEF_LIMIT:
-            return self._lost(fallback, proposed, f"more than {BELIEF_LIMIT} states it may "
-                              "be in")
+            return lost_decision(self, fallback, proposed,
+                                 f"more than {BELIEF_LIMIT} states it may be in")
         broken: tuple[str, ...] = ()
         if self.assumed:
             per_case = [set(self._broken(i, outs, st)) for st, i in cases]
             broken = tuple(a for a in self.assume_ids if all(a in b for b in per_case))
         return values, reasons, changed, tuple(nexts), broken, ""
-
-    def _lost(self, fallback: tuple[list[int], dict[str, Any]] | None,
-              proposed: dict[str, Any], why: str
-              ) -> tuple[dict[str, Any], tuple[str, ...], tuple[str, ...], None, tuple[str, ...],
-                         str]:
-        """The decision of a machine that no longer knows its state (module docstring): the
-        fallback's values of its outputs (none without a fallback), every output atom whose
-        fallback truth is not the proposal's changed."""
-        if fallback is None:
-            return {}, (), tuple(self.texts), None, (), why + "; no fallback: no outputs"
-        bits, values = fallback
-        mine = {v: values[v] for v in [*self.out_kinds, *self.passed] if v in values}
-        changed = []
-        for j, (spec, f, t) in enumerate(zip(self.outs, self.out_tests, self.texts)):
-            need = term_variables(spec[2]) if spec[1] == "pred" else {spec[0]}
-            try:
-                ok = need <= proposed.keys() and int(f(proposed)) == bits[j]
-            except (TypeError, ValueError):
-                ok = False
-            if not ok:
-                changed.append(t)
-        return mine, (), tuple(changed), None, (), why
 
     def _broken(self, ins: tuple[int, ...], outs: tuple[int, ...],
                 state: tuple[int, ...] | None = None) -> tuple[str, ...]:
@@ -626,6 +623,9 @@ class ShieldRuntime:
         #: the fallback (module docstring), None when the shield has none
         self.fallback: dict[str, Any] | None = tables.get("fallback")
         self.machines = [_Machine(t, prefs, self.fallback) for t in tables["machines"]]
+        for n, m in enumerate(self.machines):
+            m.fallback_bits = (tuple(self.fallback["atoms"][n]) if self.fallback is not None
+                               else None)
         self.input_kinds: dict[str, str] = {}
         self.output_kinds: dict[str, str] = {}
         for m in self.machines:
@@ -658,14 +658,16 @@ class ShieldRuntime:
         """Back to the initial state (before the first tick)."""
         for m in self.machines:
             m.state, m.others, m.lost = m.init, (), False
+            m.shadow, m.readable = m.init, 0
 
     @property
     def state(self) -> tuple[Any, ...]:
         """Each machine's state: its state bits (a tuple of 0/1) while it knows its state,
         else ``("belief", state bits, ...)`` (the states it may be in after a tick with an
-        unreadable input, module docstring) or ``("lost",)`` (its state unknown)."""
-        return tuple(("lost",) if m.lost else ("belief", *m.belief) if m.others else m.state
-                     for m in self.machines)
+        unreadable input, module docstring) or ``("lost", copy's state, readable ticks)``
+        (its state unknown; the copy that recovers it, module docstring)."""
+        return tuple(("lost", m.shadow, m.readable) if m.lost else ("belief", *m.belief)
+                     if m.others else m.state for m in self.machines)
 
     def restore(self, state: tuple[Any, ...]) -> None:
         """Put back a :attr:`state` read before a step (a host whose tick failed after
@@ -674,6 +676,8 @@ class ShieldRuntime:
             bits = tuple(bits)
             if bits and bits[0] == "lost":
                 m.state, m.others, m.lost = m.init, (), True
+                m.shadow, m.readable = ((tuple(bits[1]), int(bits[2])) if len(bits) == 3
+                                        else (m.init, 0))
             elif bits and bits[0] == "belief":
                 m.state, m.others, m.lost = tuple(bits[1]), tuple(bits[2:]), False
             else:
@@ -793,9 +797,11 @@ class ShieldRuntime:
         notes = list(input_faults)
         silent = False
         unknown_state: list[str] = []
+        recovered: list[str] = []
         for m, (values, why, what, nxt, gone, lost_why) in zip(self.machines, moves):
             if nxt is None:
-                m.lost = True
+                lost_why, known = settle_lost(m, lost_why, ins, unread)
+                recovered += m.reqs if known else ()
                 unknown_state += m.reqs
                 notes.append(f"the machine of {', '.join(m.reqs)}: {lost_why}")
                 if not values:
@@ -811,16 +817,19 @@ class ShieldRuntime:
                             if m.texts[j] not in what]
         fault = "; ".join(notes + faults)
         lost = tuple(unknown_state)
+        back = tuple(recovered)
         if broken:
             outs, moved = self._fallback_outputs(proposed)
-            return Decision(outs, True, tuple(reasons), moved, fault, tuple(broken), lost)
+            return Decision(outs, True, tuple(reasons), moved, fault, tuple(broken), lost,
+                            recovered=back)
         if silent:
-            return Decision({}, True, tuple(reasons), tuple(changed), fault, (), lost)
+            return Decision({}, True, tuple(reasons), tuple(changed), fault, (), lost,
+                            recovered=back)
         outputs = {v: outputs[v] for v in self.outputs if v in outputs}
         bound = [n for m in self.machines for n in m.faults]
         return Decision(outputs, bool(changed) or bool(faults) or bool(bound), tuple(reasons),
                         tuple(changed), "; ".join([fault, *bound]) if fault else "; ".join(bound),
-                        (), lost, tuple(n for m in self.machines for n in m.scaled))
+                        (), lost, tuple(n for m in self.machines for n in m.scaled), back)
 
     def _replaced(self, proposed: dict[str, Any]
                   ) -> tuple[dict[str, Any], list[str], list[str], frozenset[str]]:

@@ -18,9 +18,13 @@ Roles:
   Every valid range has up to 5 mm of noise (no frame repeats the one before).
 * ``controller``: once the Safety System subscribes, ``/cmd_vel`` (geometry_msgs/Twist,
   reliable) every 100 ms proposing to drive on at 0.3 m/s, for SECONDS.
+* ``controller20``: once its two readers match (the Safety System and the checker),
+  ``/cmd_vel`` (reliable) every 50 ms, Nav2's controller rate, each proposal its own number
+  (``linear.x`` 0.2 m/s plus 0.1 mm/s a message: every answer tells which proposal it
+  answers), for SECONDS; then it exits (a controller that dies).
 * ``checker``: an independent node that writes, as JSON lines into OUT, each message it
   receives on ``/scan`` (its least range), ``/cmd_vel_filtered`` (linear.x, angular.z),
-  ``/gwendolen_control`` (data) and ``/diagnostics`` (level, message, values) with its
+  ``/gwendolen_control`` (data), ``/cmd_vel`` (linear.x) and ``/diagnostics`` (level, message, values) with its
   receipt time: the middleware's ``received_timestamp`` (ns), when the message reached this
   node (its callbacks run later, in the executor's order, not the messages'), for SECONDS.
 """
@@ -127,6 +131,24 @@ def controller(seconds: float, _out: str) -> None:
     _spin(n, seconds, step)
 
 
+def controller20(seconds: float, _out: str) -> None:
+    from geometry_msgs.msg import Twist
+
+    n = rclpy.create_node("controller")
+    pub = n.create_publisher(Twist, "/cmd_vel", RELIABLE)
+    _wait_for(n, pub, 2)
+    _spin(n, 1.0)
+    sent = [0]
+
+    def step(_t: float) -> None:
+        tw = Twist()
+        tw.linear.x = 0.2 + 1e-4 * sent[0]
+        sent[0] += 1
+        pub.publish(tw)
+
+    _spin(n, seconds, step, 0.05)
+
+
 def checker(seconds: float, out: str) -> None:
     from diagnostic_msgs.msg import DiagnosticArray
     from geometry_msgs.msg import Twist
@@ -144,6 +166,8 @@ def checker(seconds: float, out: str) -> None:
             "/scan", i, {"min": min(m.ranges)}), BEST_EFFORT)
         n.create_subscription(Twist, "/cmd_vel_filtered", lambda m, i: keep(
             "/cmd_vel_filtered", i, {"x": m.linear.x, "z": m.angular.z}), BEST_EFFORT)
+        n.create_subscription(Twist, "/cmd_vel", lambda m, i: keep(
+            "/cmd_vel", i, {"x": m.linear.x}), RELIABLE)
         n.create_subscription(Bool, "/gwendolen_control", lambda m, i: keep(
             "/gwendolen_control", i, {"data": bool(m.data)}), BEST_EFFORT)
         n.create_subscription(DiagnosticArray, "/diagnostics", lambda m, i: keep(
@@ -161,7 +185,7 @@ def main() -> None:
     rclpy.init()
     try:
         {"lidar": lidar, "sector_lidar": sector_lidar, "controller": controller,
-         "checker": checker}[role](seconds, out)
+         "controller20": controller20, "checker": checker}[role](seconds, out)
     finally:
         rclpy.try_shutdown()
 
