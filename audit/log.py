@@ -42,7 +42,7 @@ from fretc.audit.operands import operand_values
 from fretc.audit.passes import LogPasses, clock_key, restrict, run_passes
 from fretc.audit.plan import select_variant
 from fretc.audit.streamed import CsvStreams, StreamedResult
-from fretc.audit.streamed_log import LogStreams, picked_times
+from fretc.audit.streamed_log import LogStreams, pick_ticks, picked_times
 from fretc.audit.streamed_verdict import (finalize_clock_streamed, finalize_streamed,
                                           streamed_values)
 from fretc.audit.streamed_three import ThreeResult, finalize_three, judged_three
@@ -401,8 +401,7 @@ class _LogRun:
             b = restrict(self.bindings, names) if self.bindings is not None else None
             try:
                 result = run_passes(plan, source, b, active, progress, self._log_streams())
-                got = result.streamed
-                if got is not None and (got.again or got.pick):
+                if result.streamed is not None and result.streamed.again:
                     result = self._read_again(result, b, active)
             except SignalError as exc:
                 culprit = exc.variable
@@ -442,17 +441,31 @@ class _LogRun:
     def _read_again(self, first: LogPasses, b: Bindings | None,
                     active: list[RequirementPlan]) -> LogPasses:
         """The log read a second time: the clocks of ``first.streamed.again`` keeping their
-        columns, the ticks a violation's evidence shows kept of the clocks of its ``pick``,
-        the others' decided already (sampled again, neither kept nor judged, so that the
-        log's figures are the same read's)."""
+        columns, the others' decided already (sampled again, neither kept nor judged, so
+        that the log's figures are the same read's)."""
         assert self.source is not None and first.streamed is not None  # (streamed)
         got = first.streamed
-        decided = frozenset(got.ticks) - got.again - set(got.pick)
-        again = LogStreams(discard=decided, pick=got.pick)
-        result = run_passes(self.plan, self.source, b, active, None, lambda _groups: again)
-        got.picked = again.picked
+        decided = frozenset(got.ticks) - got.again
+        result = run_passes(self.plan, self.source, b, active, None,
+                            lambda _groups: LogStreams(discard=decided))
         result.streamed = got
         return result
+
+    def _pick(self, result: LogPasses, b: Bindings | None,
+              active: list[RequirementPlan]) -> None:
+        """The ticks the evidence of violations decided as the log was read shows, read
+        again (:func:`fretc.audit.streamed_log.pick_ticks`)."""
+        got = result.streamed
+        if got is None or not got.pick:
+            return
+        assert b is not None  # (a log's clocks: with bindings)
+        names: dict = {}
+        for r in active:
+            key = clock_key(r, b)
+            if key in got.pick:
+                kept = names.setdefault(key, [])
+                kept += [v for v in r.variables if v not in kept]
+        got.picked = pick_ticks(self.plan, self.path, self.source, b, got.pick, names)
 
     def _record_source(self) -> None:
         """The log's damage, message counts, problems and span, from its source."""
@@ -484,6 +497,8 @@ class _LogRun:
         la, verdicts = self.la, self.verdicts
         by_index = {}
         passes = result.passes if result is not None else {}
+        if result is not None:
+            self._pick(result, b, active)
         for r in active:
             assert result is not None  # (active requirements were read)
             res = by_index[r.index] = passes[clock_key(r, b)]

@@ -130,7 +130,7 @@ def run_passes(plan: AuditPlan, source: LogSource, bindings: Bindings | None,
     """Read the log once: sample every clock of ``active``, keep the columns, then cut each
     clock at the damage. ``streams``: given the clocks and their requirements, the clocks
     judged as they are read instead (a :class:`fretc.audit.streamed_log.LogStreams`: its
-    ``take`` and ``close``).
+    ``take``, ``flush`` and ``close``).
 
     Raises:
         SignalError: a signal cannot be computed (the variable is named), or more than
@@ -179,6 +179,9 @@ def run_passes(plan: AuditPlan, source: LogSource, bindings: Bindings | None,
                               "choose a longer tick period")
         if report is not None:
             report(int(block.times[-1]), count)
+    if judged is not None:  # (the ticks a streamed clock gathered since its last chunk)
+        for key, clock in clocks.items():
+            judged.flush(key, clock.columns)
     passes: dict[ClockKey, ClockPass] = {}
     gaps, bridged = split_bridged(inner_gaps(source), plan.config.bridge_gaps_ns)
     for key, clock in clocks.items():

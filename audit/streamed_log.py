@@ -16,6 +16,8 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from fretc.audit.columns import TickColumns
+from fretc.logs import open_log
+from fretc.signals import sample_blocks
 from fretc.audit.gaps import gaps_of_clock
 from fretc.audit.streamed import (RequirementStreams, StreamedResult, feed_streams,
                                   streams_of, unstreamed_reason)
@@ -29,12 +31,15 @@ if TYPE_CHECKING:
     from fretc.signals.bindings import Bindings
     from fretc.signals.blocks import TickBlock
 
-__all__ = ["KEEP_TICKS", "ClockResult", "Picked", "Closed", "LogStreams", "wanted_ticks",
-           "picked_times"]
+__all__ = ["KEEP_TICKS", "FEED_TICKS", "ClockResult", "Picked", "Closed", "LogStreams",
+           "wanted_ticks", "picked_times", "pick_ticks"]
 
 #: Ticks a clock keeps as columns before its requirements are judged as the log is read
 #: (a log this short is judged whole, as one chunk; tests set it to 0 to stream every tick).
 KEEP_TICKS = 1 << 16
+#: Ticks a streamed clock gathers (from the sampler's blocks) before it feeds them to its
+#: streams as one chunk: fewer, longer chunks, in memory that does not grow with the log.
+FEED_TICKS = 1 << 14
 
 
 @dataclass
@@ -50,6 +55,8 @@ class ClockResult:
 
     result: StreamedResult
     held: int | None
+    #: the log time its clock's topics held at the last tick (None: none)
+    last_held: int | None = None
     #: a violation's: the ticks whose times, held log times and values its evidence shows
     #: (:func:`wanted_ticks`), read again (:class:`Picked`); empty when it holds
     wanted: frozenset[int] = frozenset()
@@ -94,17 +101,17 @@ def picked_times(n: int, picked: Picked) -> Any:
 
 def wanted_ticks(ev: Evidence, n: int, window: int) -> frozenset[int] | None:
     """The ticks (of ``n``) a violation's evidence ``ev`` names (the first violation's
-    trigger, scope interval, window and violation tick, each violation listed) and those
-    within ``window`` of its trigger and violation tick, whose values are shown
-    (:func:`fretc.audit.finalize.shown_ticks`), with the last tick; None without a first
-    violation."""
+    trigger, scope interval, window and violation tick, each violation listed; the last
+    tick, which the streams keep, left out) and those within ``window`` of its trigger and
+    violation tick, whose values are shown (:func:`fretc.audit.finalize.shown_ticks`); None
+    without a first violation."""
     w = ev.violation
     if w is None:
         return None
     named = [w.trigger_tick, *w.interval, *w.window, w.violation_tick]
     for x in ev.listed:
         named += [x.trigger_tick, x.violation_tick]
-    out = {min(max(t, 0), n - 1) for t in named} | {n - 1}
+    out = {min(max(t, 0), n - 1) for t in named} - {n - 1}
     for c in (w.trigger_tick, min(w.violation_tick, n - 1)):
         out.update(i for i in range(c - window, c + window + 1) if 0 <= i < n)
     return frozenset(out)
@@ -121,6 +128,7 @@ class _Clock:
         self.first_time: int | None = None
         self.last_time: int | None = None
         self.held0: int | None = None
+        self.last_held: int | None = None
         self._held: deque[tuple[int, np.ndarray]] = deque()
         #: requirement index -> (robustness tick, held log time there)
         self.rob_held: dict[int, tuple[int, int | None]] = {}
@@ -141,6 +149,7 @@ class _Clock:
             self.first_time = int(times[0])
             self.held0 = int(held[0]) if held[0] >= 0 else None
         self.last_time = int(times[-1])
+        self.last_held = int(held[-1]) if held[-1] >= 0 else None
         self._held.append((first, held))
         self.n = first + k
         for s in self.streams:
@@ -189,7 +198,7 @@ class _Clock:
             ltl3 = s.ltl3.finish() if s.ltl3 is not None else ("unknown", None, None)
             assert self.last_time is not None  # (n ticks)
             out[i] = ClockResult(StreamedResult(ev, times, ltl3, rob, self.n, self.last_time),
-                                 self.rob_held[i][1], wanted)
+                                 self.rob_held[i][1], self.last_held, wanted)
         self.streams = []
         self._held.clear()
         return out, again
@@ -246,7 +255,8 @@ class LogStreams:
     def take(self, key: ClockKey, block: TickBlock, columns: TickColumns) -> bool:
         """Whether the block of clock ``key`` is taken here (else its columns keep it):
         discarded, or fed to the clock's streams (its ``columns`` so far fed first and
-        emptied, once it passes :attr:`keep` ticks)."""
+        emptied, once it passes :attr:`keep` ticks; then gathered in ``columns`` and fed
+        every :data:`FEED_TICKS` ticks, :meth:`flush`)."""
         if key in self.discard:
             return True
         if key in self.pick:
@@ -261,8 +271,19 @@ class LogStreams:
                 return False
             for times, cols, lts in columns.drain():
                 c.feed(times, cols, lts)
-        c.feed(block.times, block.values, block.log_times)
+        columns.append_block(block)
+        if columns.n >= FEED_TICKS:
+            self.flush(key, columns)
         return True
+
+    def flush(self, key: ClockKey, columns: TickColumns) -> None:
+        """Feed the ticks of clock ``key`` gathered since its last chunk (``columns``, then
+        empty) to its streams; nothing for a clock whose columns are kept."""
+        c = self.clocks.get(key)
+        if c is not None and columns.n:
+            times, cols, lts = columns.finish()
+            columns.n = 0
+            c.feed(times, cols, lts)
 
     def _pick(self, key: ClockKey, block: TickBlock) -> None:
         """Keep the wanted ticks of ``block`` (:attr:`pick`)."""
@@ -323,3 +344,32 @@ class Closed:
     again: set[ClockKey] = field(default_factory=set)
     pick: dict[ClockKey, frozenset[int]] = field(default_factory=dict)
     picked: dict[ClockKey, Picked] = field(default_factory=dict)
+
+
+def pick_ticks(plan: AuditPlan, path: str, first: LogSource | None, bindings: Bindings,
+               pick: dict[ClockKey, frozenset[int]], names: dict[ClockKey, list[str]]
+               ) -> dict[ClockKey, Picked]:
+    """The ticks of ``pick`` (clock -> the ticks its violations' evidence shows) read again
+    from the log ``path`` (``first``: the audit's source, whose ``reopen()`` spares a flight
+    log's second read), each clock sampled on its variables ``names`` as the audit sampled
+    it; the read stops once every clock is past its last tick wanted (as the read of a
+    violation's operands does, :func:`fretc.audit.operands.operand_values`).
+
+    Raises:
+        LogError, SignalError, OSError: the log cannot be read again as it was."""
+    source = (first.reopen() if first is not None else None) or open_log(
+        path, csv_period_ns=plan.csv_period_ns, msg_path=plan.config.msg_path)
+    taker = LogStreams(pick=pick)
+    last = {key: max(ticks) for key, ticks in pick.items()}
+    done: set[ClockKey] = set()
+    blocks = iter(sample_blocks(source, bindings, {k: (names[k], k.topics) for k in pick}))
+    for key, blk in blocks:
+        taker._pick(key, blk)
+        if blk.start + len(blk.times) > last[key]:
+            done.add(key)
+        if len(done) >= len(last):  # every tick wanted is read: the rest of the log is not
+            break
+    close = getattr(blocks, "close", None)
+    if close is not None:  # the reader's file closed now, not when collected
+        close()
+    return taker.picked

@@ -42,22 +42,27 @@ def finalize_streamed(plan: AuditPlan, r: RequirementPlan, got: StreamedResult,
 class PickedTicks(StreamTicks):
     """The ticks of a clock judged as its log was read whose evidence was read again
     (:class:`fretc.audit.streamed_log.Picked`), as :class:`fretc.audit.finalize._Ticks` gives
-    a clock's ticks: each with the log time its topics held; a tick past the last counted
-    on with the bindings' tick period."""
+    a clock's ticks: each with the log time its topics held (the last tick's, ``last_held``,
+    kept by the streams); a tick past the last counted on with the bindings' tick period."""
 
-    def __init__(self, n: int, last_time: int, picked: Picked, period_ns: int | None) -> None:
+    def __init__(self, n: int, last_time: int, last_held: int | None, picked: Picked,
+                 period_ns: int | None) -> None:
         super().__init__(picked.times, n, last_time)
-        self.held, self.period_ns = picked.held, period_ns
+        self.held, self.last_held, self.period_ns = picked.held, last_held, period_ns
 
     def point(self, i: int) -> TimePoint:
         j = min(max(i, 0), self.n - 1)
+        if j == self.n - 1:
+            return TimePoint(int(i), self.last_time, self.last_held)
         return TimePoint(int(i), self.times[j], self.held[j])
 
     def time_at(self, i: int) -> int | None:
-        if 0 <= i < self.n:
+        if 0 <= i < self.n - 1:
             return self.times[i]
+        if i == self.n - 1:
+            return self.last_time
         if i >= self.n and self.period_ns:
-            return self.times[self.n - 1] + (i - self.n + 1) * self.period_ns
+            return self.last_time + (i - self.n + 1) * self.period_ns
         return None
 
 
@@ -74,7 +79,7 @@ def finalize_clock_streamed(plan: AuditPlan, r: RequirementPlan, got: ClockResul
     if got.wanted:
         assert picked is not None  # (read again for its wanted ticks)
         period = bindings.tick.period_ns if bindings is not None else None
-        ticks = PickedTicks(res.n, res.last_time, picked, period)
+        ticks = PickedTicks(res.n, res.last_time, got.last_held, picked, period)
     judged(plan, r, v, ticks, res.evidence, res.ltl3,
            (rob.value, rob.tick, rob.tick_time, rob.points), held=got.held)
     if v.verdict != "violated":

@@ -5,6 +5,7 @@
     python bench/bench_csv_memory.py --rows 1000000 --trace   # where the bytes go (tracemalloc)
     python bench/bench_csv_memory.py --nan first last --no-runner  # one NaN linear_speed
     python bench/bench_csv_memory.py --gap middle --no-runner      # one gap row
+    python bench/bench_csv_memory.py --gap middle --cut --no-runner  # and a cut row at the end
 
 1. Writes a plain CSV trace (``time`` in seconds every 100 ms, then the Safe-ROS variables;
    obstacles come and go, the robot stops within 0.5 s, speeds under their limits: every
@@ -21,7 +22,9 @@
    row (R4 and the others reading it have an unknown tick: judged in three-valued
    semantics, :mod:`fretc.audit.streamed_three`, against the whole-trace three-valued judge).
    ``--gap middle``: the same trace with a ``gap`` row in its middle (a gap tick, one tick
-   or more: every requirement judged in three-valued semantics).
+   or more: every requirement judged in three-valued semantics). ``--cut``: a last row of
+   ``cut`` cells (the trace cut short: the verdict at a cut reads the obligations still
+   open at its last tick, from the columns: known problem KP-001).
 3. ``--trace``: the audit in this process under :mod:`tracemalloc`: the peak of Python
    allocations and the 15 largest allocation sites at the peak (numpy arrays included).
 """
@@ -135,6 +138,23 @@ def with_gap(trace: Path) -> Path:
     return out
 
 
+def with_cut(trace: Path) -> Path:
+    """A copy of ``trace`` (beside it, reused) ending with a row of ``cut`` cells (its time
+    50 ms after the last row's)."""
+    out = trace.with_name(f"{trace.stem}_cut.csv")
+    if out.exists():
+        return out
+    last = ""
+    with open(trace, encoding="ascii") as f, open(out, "w", encoding="ascii") as g:
+        for line in f:
+            g.write(line)
+            last = line
+    with open(out, "a", encoding="ascii") as g:
+        t = float(last.split(",", 1)[0]) + 0.05
+        g.write(",".join([f"{t:.2f}"] + ["cut"] * (len(COLUMNS) - 1)) + "\n")
+    return out
+
+
 def measured(cmd: list[str], env: dict | None = None) -> tuple[int, float, str, int]:
     """(peak RSS kB, user + system CPU s, stdout, exit status) of ``cmd`` under time -v."""
     got = subprocess.run(["/usr/bin/time", "-v", *cmd], capture_output=True, text=True,
@@ -240,6 +260,7 @@ def main() -> None:
                     help="a NaN linear_speed in the trace's first or last row")
     ap.add_argument("--gap", choices=["none", "middle"], default="none",
                     help="a gap row in the middle of the trace")
+    ap.add_argument("--cut", action="store_true", help="a cut row at the trace's end")
     args = ap.parse_args()
     work = Path(args.workdir)
     work.mkdir(parents=True, exist_ok=True)
@@ -254,6 +275,8 @@ def main() -> None:
             trace = with_nan(trace, nan)
         if args.gap != "none":
             trace = with_gap(trace)
+        if args.cut:
+            trace = with_cut(trace)
         for n in args.requirements:
             fret = work / f"req{n}.fret"
             fret.write_text(REQUIREMENTS[n])

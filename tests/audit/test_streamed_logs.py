@@ -3,8 +3,9 @@ a clock's requirements are fed its blocks of ticks and its columns dropped.
 
 * Metamorphic: on every log the tests have (the cases of tests/audit/_metamorphic.py: the
   shipped runs, the real logs, the foreign bags, MCAP and ULog files; a damaged copy of a
-  shipped run), streaming from tick 0, from tick 1 or past a few dozen ticks gives the audit
-  JSON of the whole clock judged as one chunk, byte for byte;
+  shipped run; a DataFlash log, a rosbag2 folder), streaming from tick 0, from tick 1 or
+  past a few dozen ticks, in chunks of 1, 7 or the default ticks, gives the audit JSON of
+  the whole clock judged as one chunk, byte for byte;
 * memory: the audit of a long MCAP log does not grow with its ticks (the growth of the
   traced peak between two lengths of the same run, as tests/audit/test_csv_memory.py).
 """
@@ -26,8 +27,9 @@ import fretc.audit.streamed_log as streamed_log
 from fretc.audit import AuditConfig, audit_log, load_plan
 
 ROOT = Path(__file__).resolve().parents[2]
-#: streaming from the first tick, the second, and past a few blocks' worth
-KEEPS = (0, 1, 37)
+#: (ticks kept before streaming, ticks a chunk gathers): from the first tick a tick a chunk,
+#: from the second seven a chunk, past a few dozen the default chunks
+KEEPS = ((0, 1), (1, 7), (37, streamed_log.FEED_TICKS))
 
 
 def _audit(fret: Path, log: Path) -> str:
@@ -56,9 +58,11 @@ def check_chunks(case: M.Case, tmp: Path, monkeypatch) -> list[int]:
     monkeypatch.setattr(streamed_log, "KEEP_TICKS", 1 << 40)  # (every clock one chunk)
     whole = _audit(fret, case.log)
     decided = _counted(monkeypatch)
-    for keep in KEEPS:
+    for keep, feed in KEEPS:
         monkeypatch.setattr(streamed_log, "KEEP_TICKS", keep)
-        assert _audit(fret, case.log) == whole, f"{case.id}: streamed past {keep} ticks"
+        monkeypatch.setattr(streamed_log, "FEED_TICKS", feed)
+        assert _audit(fret, case.log) == whole, f"{case.id}: streamed past {keep} ticks, " \
+                                                f"{feed} a chunk"
     return decided
 
 
