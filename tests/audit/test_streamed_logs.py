@@ -141,6 +141,7 @@ def test_a_dataflash_log_and_a_rosbag2_folder_streamed_give_the_whole_clocks_aud
 REQUIREMENTS = """\
 R1: the robot shall always satisfy speed <= 0.5
 R2: upon blocked the robot shall within 200 ticks satisfy stopped
+R3: the robot shall always satisfy speed <= 0.2
 """
 BINDINGS = """\
 [tick]
@@ -158,7 +159,8 @@ WHOLE_BYTES_PER_TICK = 20
 
 def _write_run(path: Path, ticks: int) -> None:
     """A run of ``ticks`` ticks of 1 ms: ``/cmd_vel`` every 10 ms (stopped for 300 ms of
-    every 1000 ms), ``/blocked`` true at the start of each stop (both requirements hold)."""
+    every 1000 ms), ``/blocked`` true at the start of each stop (R1 and R2 hold; R3 is
+    violated whenever the robot moves: its evidence read again)."""
     msgs = []
     for k in range(ticks // 10 + 1):
         t = k * 10 * MS
@@ -177,7 +179,8 @@ def _peak(plan, path: Path) -> int:
         peak = tracemalloc.get_traced_memory()[1]
     finally:
         tracemalloc.stop()
-    assert [v.verdict for v in la.verdicts] == ["satisfied", "satisfied"], la.verdicts
+    assert [v.verdict for v in la.verdicts] == ["satisfied", "satisfied", "violated"], \
+        la.verdicts
     return peak
 
 
