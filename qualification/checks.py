@@ -299,6 +299,130 @@ def check_fret_forms(run: Run) -> list[str]:
     return out
 
 
+#: random words per key of the ft_inf check
+INF_WORDS = 4
+#: all-false ticks after a finite trace that stand for its infinite all-false tail in the
+#: reference (more than any bound of the key sentences can reach)
+INF_TAIL = 3 * ref.DURATION + 2
+
+
+def check_ft_inf(run: Run) -> list[str]:
+    """For every key but ``finally`` and random traces: the ft_inf formula accepts the
+    infinite word of the trace followed by the absorbing all-false state (Spot) exactly when
+    the reference's verdict on the trace followed by :data:`INF_TAIL` all-false ticks is not
+    violated. (``finally`` is the scope's last tick, which an open scope of an infinite word
+    does not have.)"""
+    try:
+        import spot
+    except ImportError as exc:
+        raise CheckSkipped(f"Spot is not installed ({exc})") from None
+    from fretc.compiler.printers import to_spot
+    from fretc.compiler.semantics import formalize
+    from fretc.fretish import parse
+
+    rnd = random.Random(SEED + 7)
+    quiet = {v: False for v in ref.VARIABLES}
+    tail = "cycle{" + " & ".join(f"!{v}" for v in ref.VARIABLES) + "}"
+    out = []
+    for key, text in ref.key_sentences():
+        if key.endswith(",finally"):
+            continue
+        aut = spot.translate(spot.formula(to_spot(formalize(parse(text)).ft_inf)))
+        for _ in range(INF_WORDS):
+            trace = ref.random_trace(rnd, rnd.randint(1, MAX_TRACE))
+            letters = [" & ".join(v if t[v] else f"!{v}" for v in ref.VARIABLES)
+                       for t in trace]
+            word = spot.parse_word("; ".join([*letters, tail]))
+            got = bool(aut.intersects(word.as_automaton()))
+            want = ref.verdict(key, trace + [quiet] * INF_TAIL) != "violated"
+            if got != want:
+                out.append(f"{key} on {_text(trace)} then all false: ft_inf "
+                           f"{'accepts' if got else 'rejects'}, the reference says "
+                           f"{'holds' if want else 'violated'}")
+                break
+    return _capped(out)
+
+
+def _fn_persisted(p: list[bool], t: int, s: int, e: int) -> bool:
+    return t - 2 >= s and all(p[t - 2:t + 1])
+
+
+def _fn_occurred(p: list[bool], t: int, s: int, e: int) -> bool:
+    return any(p[max(s, t - 2):t + 1])
+
+
+def _fn_persists(p: list[bool], t: int, s: int, e: int) -> bool:
+    return t + 2 <= e and all(p[t:t + 3])
+
+
+def _fn_occurs(p: list[bool], t: int, s: int, e: int) -> bool:
+    return any(p[t:min(t + 2, e) + 1])
+
+
+#: the temporal functions (docs/reference/semantics.md's table), each with its meaning at
+#: tick t of the scope interval [s, e] over the response's column p (n = 2) and q
+FUNCTIONS: dict[str, Callable[[list[bool], list[bool], int, int, int], bool]] = {
+    "persisted(2, p)": lambda p, q, t, s, e: _fn_persisted(p, t, s, e),
+    "occurred(2, p)": lambda p, q, t, s, e: _fn_occurred(p, t, s, e),
+    "persists(2, p)": lambda p, q, t, s, e: _fn_persists(p, t, s, e),
+    "occurs(2, p)": lambda p, q, t, s, e: _fn_occurs(p, t, s, e),
+    "prevOcc(p, q)": lambda p, q, t, s, e: t == s or next(
+        (q[j] for j in range(t - 1, s - 1, -1) if p[j]), True),
+    "nextOcc(p, q)": lambda p, q, t, s, e: t == e or next(
+        (q[j] for j in range(t + 1, e + 1) if p[j]), True),
+    "preBool(true, p)": lambda p, q, t, s, e: True if t == 0 else p[t - 1],
+}
+
+
+def check_functions(run: Run) -> list[str]:
+    """Each temporal function in a response (``always satisfy F``), without a scope and in
+    ``in m mode`` (the scope intervals the maximal runs of m), on random traces: the judge's
+    verdict is satisfied exactly when F holds at every tick of every interval, F evaluated
+    as docs/reference/semantics.md's table says relative to the interval's ends."""
+    import numpy as np
+
+    from fretc.compiler.build import compile_entry
+    from fretc.monitors.interval import verdict_of
+
+    rnd = random.Random(SEED + 9)
+    out = []
+    for text, meaning in FUNCTIONS.items():
+        for scoped in (False, True):
+            sentence = f"{'in m mode ' if scoped else ''}the sw shall always satisfy {text}"
+            req = compile_entry(_entry("F", sentence)).requirement
+            if req is None:
+                out.append(f"{sentence!r} does not compile")
+                continue
+            for _ in range(TRACES_PER_KEY):
+                n = rnd.randint(1, MAX_TRACE)
+                cols = {v: [rnd.random() < 0.6 for _ in range(n)] for v in ("p", "q", "m")}
+                if not scoped:
+                    cols["m"] = [True] * n
+                runs, t = [], 0
+                while t < n:
+                    if cols["m"][t]:
+                        s = t
+                        while t + 1 < n and cols["m"][t + 1]:
+                            t += 1
+                        runs.append((s, t))
+                    t += 1
+                holds = all(meaning(cols["p"], cols["q"], k, s, e)
+                            for s, e in runs for k in range(s, e + 1))
+                want = ("satisfied" if holds else "violated") if runs else "vacuous"
+                got = verdict_of(req, {v: np.array(x, dtype=np.bool_)
+                                                 for v, x in cols.items()}, n)
+                if got != want:
+                    out.append(f"{sentence!r} on p={_bits(cols['p'])} q={_bits(cols['q'])} "
+                               f"m={_bits(cols['m'])}: {got}, expected {want}")
+                    break
+    return _capped(out)
+
+
+def _bits(xs: list[bool]) -> str:
+    """A column as 0s and 1s."""
+    return "".join("1" if x else "0" for x in xs)
+
+
 def _text(trace: list[dict[str, bool]]) -> str:
     """A trace as one word per tick: the variables true there (``-`` for none)."""
     return " ".join("".join(v for v in ref.VARIABLES if t[v]) or "-" for t in trace)
@@ -314,6 +438,11 @@ CHECKS: tuple[Check, ...] = (
           "syntax errors at file:line:col; free-form sentences kept", check_syntax_errors),
     Check("semantics-formulas", ("TOR-SEM-002", "TOR-SEM-003"),
           "ft and pt of every key against the reference evaluator", check_formulas),
+    Check("semantics-ft-inf", ("TOR-SEM-004",),
+          "ft_inf of every key on infinite words against the reference", check_ft_inf),
+    Check("semantics-functions", ("TOR-SEM-008",),
+          "the temporal functions against their table, relative to the scope",
+          check_functions),
     Check("semantics-judge", ("TOR-SEM-005", "TOR-SEM-006", "TOR-SEM-007"),
           "the audit's judge on every key against the reference evaluator", check_judge),
     Check("monitors-python", ("TOR-GEN-001",),

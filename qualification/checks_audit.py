@@ -103,6 +103,36 @@ def check_audit_keys(run: Run) -> list[str]:
     return out[:5] + ([f"... and {len(out) - 5} more"] if len(out) > 5 else [])
 
 
+def check_streamed_csv(run: Run) -> list[str]:
+    """The 288 key sentences audited on random CSV traces of up to 40 rows judged as their
+    rows are read (the default) and by the judge that holds every tick (the streamed judge
+    switched off in this process): the audit JSON is the same bytes."""
+    from fretc.audit import streamed
+
+    rnd = random.Random(SEED + 10)
+    keys = ref.key_sentences()
+    text = "".join(f"K{i:03d}: {sentence}\n" for i, (_, sentence) in enumerate(keys))
+    logs = {f"s{j:02d}.csv": _csv({v: [t[v] for t in tr] for v in ref.VARIABLES})
+            for j, tr in enumerate(ref.random_trace(rnd, rnd.randint(1, 40))
+                                   for _ in range(4))}
+    docs = []
+    for on in (True, False):
+        old = streamed.ENABLED
+        streamed.ENABLED = on
+        try:
+            code, _, output = audit(run, f"streamed-{on}", text, logs)
+        finally:
+            streamed.ENABLED = old
+        path = run.work / f"streamed-{on}" / "audit.json"
+        if not path.exists():
+            return [f"no audit JSON (streamed {on}, exit {code}): {output.strip()[-200:]}"]
+        docs.append(path.read_text("utf-8").replace(f"streamed-{on}", "streamed"))
+    if docs[0] != docs[1]:
+        return ["the audit JSON of the CSV traces judged as read differs from the whole-trace "
+                "judge's"]
+    return []
+
+
 def check_verdicts_and_exit(run: Run) -> list[str]:
     """Satisfied, violated (with its first violation and its robustness), error and a
     syntax error, each with the documented exit code (0, 1, 2, 2)."""
@@ -187,6 +217,8 @@ CHECKS: tuple[Check, ...] = (
                          "TOR-TCK-007"),
           "fretc audit of the 288 key sentences on CSV traces against the reference",
           check_audit_keys),
+    Check("audit-streamed-csv", ("TOR-LOG-003",),
+          "CSV traces judged as read give the whole-trace judge's JSON", check_streamed_csv),
     Check("audit-verdicts", ("TOR-VER-003", "TOR-VER-005", "TOR-VER-006", "TOR-VER-007",
                              "TOR-GRM-002"),
           "verdicts, evidence, robustness and exit codes 0, 1, 2", check_verdicts_and_exit),

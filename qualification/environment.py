@@ -55,6 +55,27 @@ def _git_head(folder: Path) -> str | None:
     return None
 
 
+def _git_modified(folder: Path) -> list[str] | None:
+    """The tracked files of the git tree at ``folder`` that differ from its HEAD (``git
+    status --porcelain``, untracked files left out), sorted; None when git cannot say (no
+    git on the PATH, not a repository)."""
+    import shutil
+    import subprocess
+
+    git = shutil.which("git")
+    if git is None or not (folder / ".git").exists():
+        return None
+    try:
+        got = subprocess.run([git, "-C", str(folder), "status", "--porcelain",
+                              "--untracked-files=no"], capture_output=True, text=True,
+                             timeout=60, check=False)
+    except (OSError, subprocess.SubprocessError):
+        return None
+    if got.returncode != 0:
+        return None
+    return sorted(line[3:] for line in got.stdout.splitlines() if len(line) > 3)
+
+
 def package_hash() -> tuple[str, int]:
     """(SHA-256 hex, number of files) of the installed fretc package's files as they are on
     disk: every file under its folder and its sub-packages' folders (links followed, as
@@ -78,19 +99,24 @@ def package_hash() -> tuple[str, int]:
 
 
 def fretc_origin() -> dict[str, Any]:
-    """``{"version", "commit", "source", "files_sha256", "files"}`` of the installed fretc:
-    its version, the commit (a VCS install's ``commit_id``, else the HEAD of the local source
-    tree it was installed from, else None), that source's URL (None when it was installed
-    from an index) and the hash and count of its package's files (:func:`package_hash`)."""
+    """``{"version", "commit", "modified", "source", "files_sha256", "files"}`` of the
+    installed fretc: its version, the commit (a VCS install's ``commit_id``, else the HEAD of
+    the local source tree it was installed from, else None), the tracked files of that tree
+    that differ from the commit (:func:`_git_modified`; [] when none, None when not known),
+    the source's URL (None when installed from an index) and the hash and count of its
+    package's files (:func:`package_hash`)."""
     dist = metadata.distribution("fretc")
     url = _direct_url(dist)
     commit = (url.get("vcs_info") or {}).get("commit_id")
     source = url.get("url")
+    modified = None
     if commit is None and isinstance(source, str) and source.startswith("file://"):
-        commit = _git_head(Path(unquote(urlparse(source).path)))
+        tree = Path(unquote(urlparse(source).path))
+        commit = _git_head(tree)
+        modified = _git_modified(tree) if commit is not None else None
     files_sha256, count = package_hash()
-    return {"version": dist.version, "commit": commit, "source": source,
-            "files_sha256": files_sha256, "files": count}
+    return {"version": dist.version, "commit": commit, "modified": modified,
+            "source": source, "files_sha256": files_sha256, "files": count}
 
 
 def _hash(dist: metadata.Distribution) -> tuple[str | None, str]:

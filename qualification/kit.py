@@ -103,7 +103,9 @@ def summary_lines(q: Qualified) -> tuple[list[str], list[str]]:
     killed = sum(m["killed"] for m in q.doc["mutants"])
     fretc_doc = q.doc["environment"]["fretc"]
     out = [f"fretc qualify: fretc {fretc_doc['version']}"
-           + (f" (commit {fretc_doc['commit']})" if fretc_doc["commit"] else ""),
+           + (f" (commit {fretc_doc['commit']}" + (
+               f", modified: {len(fretc_doc['modified'])} file(s) differ from it"
+               if fretc_doc.get("modified") else "") + ")" if fretc_doc["commit"] else ""),
            f"{len(q.outcome.checks)} checks, "
            f"{sum(c.passed and c.ran for c in q.outcome.checks)} passed"
            + "".join(f", {c.check.name} skipped ({c.skipped})" for c in q.outcome.checks

@@ -62,7 +62,9 @@ def html_page(doc: dict[str, Any]) -> str:
         f"<h1>fretc qualification report: {_e(doc['result'])}</h1>",
         _table(["fretc", "commit", "package files (sha256)", "Python", "platform", "date",
                 "seeded fault"],
-               [[fretc["version"], fretc["commit"], f"{fretc['files_sha256']} "
+               [[fretc["version"], f"{fretc['commit']}" + (
+                   f" (modified: {', '.join(fretc['modified'])})" if fretc.get("modified")
+                   else ""), f"{fretc['files_sha256']} "
                  f"({fretc['files']} files)", env["python"]["version"],
                  env["platform"]["platform"], doc["date"], doc["seeded_fault"]]]),
     ]

@@ -21,14 +21,16 @@ from pathlib import Path
 from typing import Any
 
 from fretc.qualification import checks as checks_module
-from fretc.qualification import checks_audit, checks_forms, checks_logs
+from fretc.qualification import (checks_audit, checks_forms, checks_logs, checks_robot,
+                                 checks_signals, checks_tools)
 from fretc.qualification.catalogue import load_requirements
 from fretc.qualification.checks import Check, CheckSkipped, Run
 from fretc.qualification.faults import FAULTS
 
 #: every check of the suite, in the order it runs
 CHECKS: tuple[Check, ...] = (checks_module.CHECKS + checks_audit.CHECKS + checks_logs.CHECKS
-                             + checks_forms.CHECKS)
+                             + checks_signals.CHECKS + checks_forms.CHECKS
+                             + checks_robot.CHECKS + checks_tools.CHECKS)
 #: the environment variable that seeds a fault for a whole run (a test's way to stand for a
 #: broken installation; its value a name of :data:`fretc.qualification.faults.FAULTS`)
 SEED_VARIABLE = "FRETC_QUALIFY_SEED_FAULT"
@@ -150,12 +152,14 @@ def _fresh(work: Path, name: str, command: Any) -> Run:
 
 def mutation_run(work: Path, command: Any) -> list[dict[str, Any]]:
     """Seed each fault of :data:`FAULTS` in turn and run the checks (the end-to-end ones
-    with ``command``, the ``fretc`` click group) until one fails: a fault is killed when a
-    check fails under it (``killed_by`` names it)."""
+    with ``command``, the ``fretc`` click group), those of its ``first`` first, until one
+    fails: a fault is killed when a check fails under it (``killed_by`` names it)."""
     out = []
     for name, fault in sorted(FAULTS.items()):
+        order = ([c for c in CHECKS if c.name in fault.first]
+                 + [c for c in CHECKS if c.name not in fault.first])
         with fault.seed():
-            results = run_checks(_fresh(work, f"mutant-{name}", command),
+            results = run_checks(_fresh(work, f"mutant-{name}", command), order,
                                  stop_at_failure=True)
         killers = [r.check.name for r in results if not r.passed]
         out.append({"fault": name, "where": fault.where, "what": fault.what,
