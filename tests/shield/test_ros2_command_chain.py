@@ -100,9 +100,11 @@ def test_proposals_pass_at_the_controllers_rate_and_a_dead_controller_gets_a_sto
     # every proposal answered once, when it arrives (3 m ahead: S1..S3 keep each one)
     steady = [p for p in proposals if p["t"] > proposals[0]["t"] + 1000 * MS]
     answers = {p["x"]: [c for c in commands if abs(c["x"] - p["x"]) < 1e-9] for p in steady}
-    once = [x for x, got in answers.items() if len(got) == 1]
-    assert len(once) >= 0.98 * len(steady), {x: len(v) for x, v in answers.items()
-                                              if len(v) != 1}
+    # (best effort both ways: under load the odd message is lost on the bus, never answered
+    # twice; at the scan's rate half of them were never answered)
+    twice = {x: len(v) for x, v in answers.items() if len(v) > 1}
+    never = [x for x, got in answers.items() if not got]
+    assert not twice and len(never) <= 0.1 * len(steady), (twice, never)
     waits = sorted((got[0]["t"] - p["t"]) / MS for p in steady
                    for got in [answers[p["x"]]] if got)
     assert waits[len(waits) // 2] < 15, waits  # p50: not a tick's wait (51 ms before)
