@@ -76,23 +76,29 @@ def _git_modified(folder: Path) -> list[str] | None:
     return sorted(line[3:] for line in got.stdout.splitlines() if len(line) > 3)
 
 
-def package_hash() -> tuple[str, int]:
-    """(SHA-256 hex, number of files) of the installed fretc package's files as they are on
-    disk: every file under its folder and its sub-packages' folders (links followed, as
-    Python imports them; ``__pycache__`` left out), each as its path relative to the package
-    and its bytes, in sorted order."""
+def package_files() -> list[tuple[str, Path]]:
+    """The installed fretc package's files as (path relative to the package, path on disk),
+    sorted by the relative path: every file under its folder and its sub-packages' folders
+    (links followed, as Python imports them; ``__pycache__`` and bytecode left out)."""
     import importlib.resources
     import os
 
     root = Path(str(importlib.resources.files("fretc")))
-    digest = hashlib.sha256()
     files = []
     for here, dirs, names in os.walk(root, followlinks=True):
         dirs[:] = sorted(d for d in dirs if d != "__pycache__")
         files += [Path(here) / n for n in names if not n.endswith((".pyc", ".pyo"))]
-    for path in sorted(files, key=lambda p: p.relative_to(root).as_posix()):
-        rel = path.relative_to(root).as_posix().encode("utf-8")
-        digest.update(len(rel).to_bytes(4, "big") + rel)
+    return sorted(((p.relative_to(root).as_posix(), p) for p in files), key=lambda x: x[0])
+
+
+def package_hash() -> tuple[str, int]:
+    """(SHA-256 hex, number of files) of the installed fretc package's files as they are on
+    disk (:func:`package_files`), each as its relative path and its bytes, in order."""
+    digest = hashlib.sha256()
+    files = package_files()
+    for rel, path in files:
+        name = rel.encode("utf-8")
+        digest.update(len(name).to_bytes(4, "big") + name)
         data = path.read_bytes()
         digest.update(len(data).to_bytes(8, "big") + data)
     return digest.hexdigest(), len(files)

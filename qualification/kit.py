@@ -73,22 +73,42 @@ def seeded_fault() -> str | None:
     return name
 
 
-def qualify(path: str, command: Any, mutation: bool = True) -> Qualified:
-    """Run the validation suite (its end-to-end checks running ``command``, the ``fretc``
-    click group) and write its report into the folder ``path`` (:func:`prepare_folder`;
-    the checks' files in its ``work`` folder).
+def read_manifest(path: str) -> dict[str, Any]:
+    """The installed files against the release manifest at ``path``
+    (:func:`fretc.qualification.manifest.compare`, with ``file``: the path).
 
     Raises:
-        OutputError: the folder is refused (:func:`prepare_folder`) or the fault seeded is
-            unknown (:func:`seeded_fault`), before anything is written; or the report
-            cannot be written."""
+        OutputError: the file cannot be read or is no manifest (the message names it)."""
+    import json
+
+    from fretc.qualification.manifest import compare
+
+    try:
+        doc = json.loads(Path(path).read_text(encoding="utf-8"))
+        return {"file": path, **compare(doc)}
+    except (OSError, UnicodeDecodeError, ValueError) as exc:
+        raise OutputError(f"--manifest {path}: {exc}") from None
+
+
+def qualify(path: str, command: Any, mutation: bool = True,
+            manifest: str | None = None) -> Qualified:
+    """Run the validation suite (its end-to-end checks running ``command``, the ``fretc``
+    click group) and write its report into the folder ``path`` (:func:`prepare_folder`;
+    the checks' files in its ``work`` folder); with ``manifest`` (a release's manifest
+    file) the installed files compared with it (:func:`read_manifest`).
+
+    Raises:
+        OutputError: the folder is refused (:func:`prepare_folder`), the fault seeded is
+            unknown (:func:`seeded_fault`) or the manifest unreadable, before anything is
+            written; or the report cannot be written."""
     seeded = seeded_fault()
+    compared = read_manifest(manifest) if manifest is not None else None
     folder = prepare_folder(path)
     from fretc.common.outputs import sub_folder
 
     work = Path(sub_folder(folder, "work"))
     outcome = validate(work, command, seeded=seeded, mutation=mutation)
-    doc = document(outcome, environment())
+    doc = document(outcome, environment(), manifest=compared)
     return Qualified(outcome, doc, write_report(folder, doc))
 
 
@@ -123,6 +143,17 @@ def summary_lines(q: Qualified) -> tuple[list[str], list[str]]:
             err += [f"  {f}" for f in r["failures"]]
     err += [f"NOT DETECTED: seeded fault {m['fault']} ({m['what']})"
             for m in q.doc["mutants"] if not m["killed"]]
+    m = q.doc.get("manifest")
+    if m is not None:
+        counts = {k: len(m[k]) for k in ("changed", "missing", "extra")}
+        if any(counts.values()):
+            err.append(f"NOT THE RELEASE: the installed files differ from {m['file']} "
+                       f"(version {m['version']}): " + ", ".join(
+                           f"{n} {k}" for k, n in counts.items() if n)
+                       + "; " + ", ".join((m["changed"] + m["missing"] + m["extra"])[:5]))
+        else:
+            out.insert(1, f"manifest: the installed files are those of {m['file']} "
+                          f"(version {m['version']})")
     if q.outcome.seeded:
         err.insert(0, f"{SEED_VARIABLE}={q.outcome.seeded}: the fault was seeded for this run")
     return out, err

@@ -3,7 +3,8 @@ and ``report.html`` (the same, for a reader), written through :mod:`fretc.common
 
 The JSON document: ``format`` (1), ``tool`` (``fretc qualify``), ``date`` (UTC, ISO 8601:
 when the run ended; the one field that differs between two runs of one installation),
-``result`` (``passed`` or ``failed``), ``failed_requirements`` (ids), ``seeded_fault`` (the
+``result`` (``passed`` or ``failed``), ``manifest`` (``--manifest``: the installed files
+against the release's, else null), ``failed_requirements`` (ids), ``seeded_fault`` (the
 fault ``FRETC_QUALIFY_SEED_FAULT`` seeded, or null), ``environment``
 (:func:`fretc.qualification.environment.environment`), ``requirements`` (each id with its
 result, :meth:`fretc.qualification.suite.Outcome.requirement_results`), ``checks`` (each
@@ -23,13 +24,19 @@ from fretc.qualification.suite import Outcome
 
 
 def document(outcome: Outcome, environment: dict[str, Any],
-             now: datetime.datetime | None = None) -> dict[str, Any]:
+             now: datetime.datetime | None = None,
+             manifest: dict[str, Any] | None = None) -> dict[str, Any]:
     """The report's JSON document (module docstring) of a validation run; ``now`` its date
-    (default: the current UTC time)."""
+    (default: the current UTC time); ``manifest`` the comparison with a release's manifest
+    (:func:`fretc.qualification.manifest.compare`, with its ``file``), which fails the run
+    when a file differs."""
     when = (now or datetime.datetime.now(datetime.UTC)).replace(microsecond=0)
+    differs = manifest is not None and any(manifest[k] for k in ("changed", "missing",
+                                                                  "extra"))
     return {
         "format": 1, "tool": "fretc qualify", "date": when.isoformat(),
-        "result": "passed" if outcome.passed else "failed",
+        "result": "passed" if outcome.passed and not differs else "failed",
+        "manifest": manifest,
         "failed_requirements": outcome.failed_requirements,
         "seeded_fault": outcome.seeded, "environment": environment,
         "requirements": outcome.requirement_results(),
@@ -68,6 +75,13 @@ def html_page(doc: dict[str, Any]) -> str:
                  f"({fretc['files']} files)", env["python"]["version"],
                  env["platform"]["platform"], doc["date"], doc["seeded_fault"]]]),
     ]
+    m = doc.get("manifest")
+    if m is not None:
+        bad = [f"{k}: {', '.join(m[k])}" for k in ("changed", "missing", "extra") if m[k]]
+        parts.append(f"<p class=\"{'failed' if bad else 'passed'}\">Manifest "
+                     f"{_e(m['file'])} (version {_e(m['version'])}): "
+                     + (_e("; ".join(bad)) if bad else "the installed files are the release's")
+                     + "</p>")
     if doc["failed_requirements"]:
         parts.append("<p class=\"failed\">Failed requirements: "
                      f"{_e(', '.join(doc['failed_requirements']))}</p>")

@@ -2,8 +2,8 @@
 installed fretc (:mod:`fretc.qualification`), its report written into DIR.
 
 Exit codes: 0 every check passed and every seeded fault of the mutation run was detected;
-1 a check failed (standard error and the report name each requirement id) or a seeded fault
-went undetected; 2 a usage error (DIR a file, a folder with files in it, inside the
+1 a check failed (standard error and the report name each requirement id), a seeded fault
+went undetected, or an installed file differs from ``--manifest``'s; 2 a usage error (DIR a file, a folder with files in it, inside the
 installed fretc; an unknown ``FRETC_QUALIFY_SEED_FAULT``), nothing written.
 """
 
@@ -25,7 +25,11 @@ __all__ = ["qualify_cmd"]
 @click.option("--no-mutation", is_flag=True, default=False,
               help="Skip the mutation run (the faults seeded to show that the suite detects "
                    "a broken fretc).")
-def qualify_cmd(output: str, no_mutation: bool) -> None:
+@click.option("--manifest", type=click.Path(dir_okay=False),
+              help="A release's manifest (python -m fretc.qualification.manifest FILE, "
+                   "published with the release): the installed files are compared with it, "
+                   "and a file that differs fails the run.")
+def qualify_cmd(output: str, no_mutation: bool, manifest: str | None) -> None:
     """Run the tool qualification kit's validation suite on this installation of fretc and
     write its report (report.json, report.html) into OUTPUT: fretc's version and commit,
     Python, the platform, every installed distribution's version and hash, each tool
@@ -36,10 +40,10 @@ def qualify_cmd(output: str, no_mutation: bool) -> None:
 
     # the whole fretc group, as the console script runs it: the end-to-end checks run it
     command = click.get_current_context().find_root().command
-    result = qualify(output, command, mutation=not no_mutation)
+    result = qualify(output, command, mutation=not no_mutation, manifest=manifest)
     out, err = summary_lines(result)
     for line in out:
         click.echo(shown(line))
     for line in err:
         click.echo(shown(line), err=True)
-    sys.exit(0 if result.outcome.passed else 1)
+    sys.exit(0 if result.doc["result"] == "passed" else 1)
