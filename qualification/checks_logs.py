@@ -20,10 +20,12 @@ MS = 1_000_000
 Message = tuple[str, int, Any]
 
 
-def write_mcap(path: Path, messages: list[Message], chunk_size: int = 1 << 20) -> None:
+def write_mcap(path: Path, messages: list[Message], chunk_size: int = 1 << 20,
+               stamps: dict[int, int] | None = None) -> None:
     """An MCAP file of ``messages`` (ROS 2 CDR by ``rosbags``, framed by ``mcap``'s writer,
     with CRCs): a list value is a LaserScan's ranges (0.1 .. 10 m, 4 beams over 90 degrees),
-    any other a Float64."""
+    its header stamp its log time or ``stamps[i]`` (ns) for the i-th message, any other a
+    Float64."""
     import numpy as np
     from mcap.writer import Writer
     from rosbags.typesys import Stores, get_typestore
@@ -42,7 +44,8 @@ def write_mcap(path: Path, messages: list[Message], chunk_size: int = 1 << 20) -
                 channels[topic] = (w.register_channel(topic, "cdr", schema), typ)
             if isinstance(value, list):
                 T = store.types
-                stamp = T["builtin_interfaces/msg/Time"](sec=time_ns // S, nanosec=time_ns % S)
+                at = (stamps or {}).get(i, time_ns)
+                stamp = T["builtin_interfaces/msg/Time"](sec=at // S, nanosec=at % S)
                 msg = T[typ](header=T["std_msgs/msg/Header"](stamp=stamp, frame_id="laser"),
                              angle_min=-0.785, angle_max=0.785, angle_increment=0.5233,
                              time_increment=0.0, scan_time=0.1, range_min=0.1, range_max=10.0,

@@ -176,6 +176,40 @@ def check_gaps(run: Run) -> list[str]:
     return out
 
 
+def check_header_time(run: Run) -> list[str]:
+    """Header stamps as the time base (``time = "header"``, ``header_lag = "100 ms"``, a tick
+    per /scan message): messages are released in stamp order once the newest stamp is the
+    lag past them; a stamp older than one already released is skipped and reported
+    (``header_backwards``), and one later than the lag allows is reported late
+    (``header_late``)."""
+    from fretc.common import problems as P
+    from fretc.logs import open_log
+    from fretc.signals.bindings.files import parse_bindings
+    from fretc.signals.clock import sample
+
+    #          log time, header stamp (ms), the first range
+    rows = [(1000, 900, 1.0), (1100, 1050, 2.0), (1200, 1000, 3.0), (5000, 4900, 4.0),
+            (5100, 1020, 5.0), (5200, 5150, 6.0)]
+    folder = run.work / "header"
+    folder.mkdir(parents=True, exist_ok=True)
+    log = folder / "h.mcap"
+    write_mcap(log, [("/scan", lt * MS, [x] * 4) for lt, _, x in rows],
+               stamps={i: hs * MS for i, (_, hs, _) in enumerate(rows)})
+    b = parse_bindings('[tick]\ntopic = "/scan"\ntime = "header"\nheader_lag = "100 ms"\n'
+                       '[variables]\nx = "/scan.ranges[0]"\n')
+    s = sample(open_log(str(log)), b)
+    got = [(t.time // MS, round(float(t.values["x"]), 3)) for t in s]
+    want = [(900, 1.0), (1000, 3.0), (1050, 2.0), (4900, 4.0), (5150, 6.0)]
+    kinds = [(p.kind, p.log_time // MS) for p in s.signal_problems]
+    want_kinds = [(P.HEADER_BACKWARDS, 1200), (P.HEADER_BACKWARDS, 5100), (P.HEADER_LATE, 5100)]
+    out = []
+    if got != want:
+        out.append(f"ticks (stamp ms, value) {got}, expected {want}")
+    if kinds != want_kinds:
+        out.append(f"problems {kinds}, expected {want_kinds}")
+    return out
+
+
 #: the window functions of the windows check, with their reference over a window's values
 WINDOWS: dict[str, tuple[str, Any]] = {
     "w_mean": ("mean(/a.data, 700 ms)", lambda xs: sum(xs) / len(xs)),
@@ -246,6 +280,9 @@ CHECKS: tuple[Check, ...] = (
           "a topic silent to the log's end is stale there", check_age_to_the_end),
     Check("signals-between-ticks", ("TOR-BND-005",),
           "the messages between ticks folded by max_of_messages", check_messages_between_ticks),
+    Check("ticks-header-time", ("TOR-TCK-008",),
+          "header stamps: released in stamp order, backwards and late reported",
+          check_header_time),
     Check("bindings-windows", ("TOR-BND-004",),
           "windows over time against their functions computed here", check_windows),
     Check("bindings-schema", ("TOR-BND-001",),

@@ -52,13 +52,13 @@ def test_qualify_passes_on_this_installation_and_writes_only_its_folder(tmp_path
     assert set(results.values()) == {"passed", "not checked here", "not verified"}
     assert results["TOR-GEN-006"] == "not verified"
     # on site: every T3 requirement but those needing a ROS 2 graph, AJPF or R2U2 shown, and
-    # at least 88 % of all (the kit's figure, docs/qualification/index.md)
+    # at least 90 % of all (the kit's figure, docs/qualification/index.md)
     from fretc.qualification.catalogue import load_requirements
 
     t3 = {r.id for r in load_requirements() if r.use == "T3"}
     assert {i for i in t3 if results[i] != "passed"} <= {"TOR-GEN-006", "TOR-SHD-005",
                                                           "TOR-SHD-006"}
-    assert sum(v == "passed" for v in results.values()) >= 0.88 * len(results)
+    assert sum(v == "passed" for v in results.values()) >= 0.9 * len(results)
     # the mutation run: at least 20 faults over at least 8 modules, each detected
     mutants = {m["fault"]: m for m in doc["mutants"]}
     assert {"semantics-trigger", "tick-hold", "reader-csv", "shield-passes"} <= set(mutants)
