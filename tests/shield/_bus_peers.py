@@ -8,7 +8,8 @@ Roles:
 * ``lidar``: once its two readers match (the Safety System and the checker), ``/scan``
   (sensor_msgs/LaserScan, 720 beams over 360 degrees as the simulated Scout Mini's, best
   effort) every 100 ms: every range 0.5 m from 3 s to 6 s (an obstacle around the robot),
-  3 m otherwise, and none from 8 s on (the LiDAR falls silent); it exits after SECONDS.
+  3 m otherwise, each with up to 5 mm of noise, and none from 8 s on (the LiDAR falls
+  silent); it exits after SECONDS.
 * ``sector_lidar``, with OUT ``SCENARIO:BEAMS:FOV``: a LiDAR of another beam count and field
   of view than the simulator's (``near:360:270``: 360 beams over 270 degrees from -135
   degrees, REP 103: 0 ahead, counter-clockwise), once its two readers match, ``/scan`` every
@@ -71,12 +72,16 @@ def lidar(seconds: float, _out: str) -> None:
     _wait_for(n, pub, 2)
     _spin(n, 1.0)
 
+    noise = random.Random(3)
+
     def step(t: float) -> None:
         if t >= 8.0:
             return
         r = 0.5 if 3.0 <= t < 6.0 else 3.0
+        # (a real LiDAR's noise: no frame repeats the one before, no frozen frame, R13)
         s = LaserScan(angle_min=-3.141592653589793, angle_increment=3.141592653589793 / 360,
-                      range_min=0.1, range_max=30.0, ranges=[r] * 720)
+                      range_min=0.1, range_max=30.0,
+                      ranges=[r + noise.uniform(-0.005, 0.005) for _ in range(720)])
         s.header.stamp = n.get_clock().now().to_msg()
         pub.publish(s)
 

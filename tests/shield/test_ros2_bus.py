@@ -44,9 +44,11 @@ def _package(tmp_path: Path) -> Path:
     """The ROS 2 package of the guide's "Safe-ROS end to end" command."""
     got = CliRunner().invoke(main, [
         "shield", str(REPO / "requirements" / "safe_ros.fret"),
-        str(REPO / "requirements" / "shield" / "release.fret"), "-b",
+        str(REPO / "requirements" / "shield" / "release.fret"),
+        str(REPO / "requirements" / "shield" / "sensor_faults.fret"), "-b",
         str(REPO / "requirements" / "shield" / "safe_ros_shield.bindings.toml"), "--inputs",
-        "too_close,scan_stale,clearance,obstacle_ahead,obstacle_behind", "--outputs",
+        "too_close,scan_stale,clearance,obstacle_ahead,obstacle_behind,scan_invalid,"
+        "scan_frozen,scan_stamp_stuck", "--outputs",
         "stopped,stop_requested,forwarded_zero,linear_speed,angular_speed,linear_velocity",
         "--emit", "ros2", "-o", str(tmp_path / "shield")])
     assert got.exit_code == 0, got.output

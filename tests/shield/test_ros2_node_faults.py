@@ -74,7 +74,8 @@ for step in json.loads(sys.argv[3]):
             import numpy as np
             fields = dict(fields, ranges=np.full(8, fields.pop("r"), dtype="float32"))
         node.hear(topic, raw(topic, **fields))
-    node.tick_once(node.now())
+    if len(step) < 5:  # (a fifth item: the message alone, the node's own ticks only)
+        node.tick_once(node.now())
     out.append({"sent": [(t, getattr(getattr(m, "linear", None), "x", None)
                           if hasattr(m, "linear") else getattr(m, "data", None))
                          for t, m in sent],
@@ -85,8 +86,10 @@ print(json.dumps(out))
 '''
 
 
-def _package(tmp_path: Path, reqs: Path, bindings: Path, inputs: str, outputs: str) -> Path:
-    got = CliRunner().invoke(main, ["shield", str(reqs), "-b", str(bindings), "--inputs",
+def _package(tmp_path: Path, reqs: Path | list[Path], bindings: Path, inputs: str,
+             outputs: str) -> Path:
+    files = [str(r) for r in (reqs if isinstance(reqs, list) else [reqs])]
+    got = CliRunner().invoke(main, ["shield", *files, "-b", str(bindings), "--inputs",
                                     inputs, "--outputs", outputs, "--emit", "ros2", "-o",
                                     str(tmp_path)])
     assert got.exit_code == 0, got.output
@@ -165,3 +168,23 @@ types = { "/dist" = "std_msgs/msg/Float64", "/cmd_vel" = "geometry_msgs/msg/Twis
     # sends a corrected topic again only when its message changed)
     assert out[3]["sent"] in ([], [("/cmd_vel_filtered", 0.0)]) and out[3]["diag"][0] == 1
     assert ("/cmd_vel_filtered", 0.4) in out[4]["sent"] and out[4]["diag"][0] == 0
+
+
+@pytest.mark.tor("TOR-SHD-005")
+def test_a_scan_between_two_ticks_is_answered_at_once(tmp_path):
+    """A LiDAR faster than the tick (20 Hz under 100 ms), R7 (a stop at once while too
+    close) enforced: a too-close scan 40 ms after the last tick is not a tick, and its stop goes out when it comes (it waited for the next
+    proposal before, 50 ms), from the last tick's state, which it does not move."""
+    folder = _package(tmp_path, [REPO / "requirements" / "safe_ros.fret",
+                                 REPO / "requirements" / "shield" / "stay_stopped.fret"],
+                      REPO / "requirements" / "safe_ros.bindings.toml",
+                      "too_close,scan_stale,clearance",
+                      "stopped,stop_requested,forwarded_zero,linear_speed,angular_speed")
+    far = ["scan", "/scan", {"range_min": 0.1, "range_max": 10.0, "r": 3.0}]
+    near = ["scan", "/scan", {"range_min": 0.1, "range_max": 10.0, "r": 0.5}]
+    ms = 1_000_000
+    steps = [[*far, 0, "hear"], ["cmd", "/cmd_vel", {"linear__x": 0.3}, 10 * ms, "hear"],
+             [*far, 100 * ms, "hear"], [*near, 140 * ms, "hear"]]
+    out = _drive(folder, "safe_ros_shield_ros2", steps)
+    assert ("/cmd_vel_filtered", 0.3) in out[1]["sent"], out[1]  # the proposal answered
+    assert ("/cmd_vel_filtered", 0.0) in out[3]["sent"], out[3]  # the near scan: a stop
