@@ -27,10 +27,12 @@ requirements. Each tick:
   output no requirement reads);
 * a **proposal older than the timeout** (``proposal_timeout_ns``, the ROS 2 node's
   ``proposal_timeout``; None: no timeout, as the simulator and ``shield-replay`` read a
-  recording) is absent, whether the controller never sent one or fell silent: every output
-  bound to its topic cannot be read (``Decision.fault``: "proposal ...: no proposal on
-  /cmd_vel for ... ms"), so the shield gives the fallback's values in a message made from the
-  default message, never the last proposal again;
+  recording) is absent (a controller that fell silent): every output bound to its topic
+  cannot be read (``Decision.fault``: "proposal ...: no proposal on /cmd_vel for ... ms"),
+  so the shield gives the fallback's values in a message made from the default message,
+  never the last proposal again. Before the controller's first proposal the proposal is the
+  topic's default message, as without a timeout (a node started before its controller
+  commands rest, without the fallback's stop request);
 * :meth:`MessageShield.answer` decides a proposal when it arrives, from the state of the
   last tick, without moving it (the state advances on ticks only): a host forwards each
   proposal at the controller's rate;
@@ -251,18 +253,17 @@ class MessageShield:
 
     def _absent(self, now_ns: int) -> dict[str, Any]:
         """Each output variable bound to a corrected topic whose proposal is absent at
-        ``now_ns`` (none heard, or older than the timeout: module docstring) -> an
-        :class:`Unreadable` saying so; empty without a timeout."""
+        ``now_ns`` (older than the timeout: module docstring) -> an :class:`Unreadable`
+        saying so; empty without a timeout."""
         limit = self.proposal_timeout_ns
         if limit is None:
             return {}
         out: dict[str, Any] = {}
         for topic, source in self.proposals.items():
             heard = self.proposal_times.get(topic)
-            if heard is not None and now_ns - heard <= limit:
+            if heard is None or now_ns - heard <= limit:
                 continue
-            why = (f"no proposal on {source} yet" if heard is None else
-                   f"no proposal on {source} for {(now_ns - heard) / 1e6:.0f} ms")
+            why = f"no proposal on {source} for {(now_ns - heard) / 1e6:.0f} ms"
             for v in self.runtime.outputs:
                 b = self.bindings.variables.get(v)
                 if b is not None and topic in b.topics and self._read(v):
