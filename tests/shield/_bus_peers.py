@@ -17,8 +17,9 @@ Roles:
   beams within 30 degrees of ahead closing from 2 m at 2 s to 0.5 m at 3 s and staying there;
   ``blind``, every range NaN from 3 s on (a LiDAR that fails while it keeps publishing).
   Every valid range has up to 5 mm of noise (no frame repeats the one before).
-* ``controller``: once the Safety System subscribes, ``/cmd_vel`` (geometry_msgs/Twist,
-  reliable) every 100 ms proposing to drive on at 0.3 m/s, for SECONDS.
+* ``controller``: once its two readers match (the Safety System and the checker),
+  ``/cmd_vel`` (geometry_msgs/Twist, reliable) every 100 ms proposing to drive on at
+  0.3 m/s, for SECONDS.
 * ``controller20``: once its two readers match (the Safety System and the checker),
   ``/cmd_vel`` (reliable) every 50 ms, Nav2's controller rate, each proposal its own number
   (``linear.x`` 0.2 m/s plus 0.1 mm/s a message: every answer tells which proposal it
@@ -125,7 +126,7 @@ def controller(seconds: float, _out: str) -> None:
 
     n = rclpy.create_node("controller")
     pub = n.create_publisher(Twist, "/cmd_vel", RELIABLE)
-    _wait_for(n, pub, 1)
+    _wait_for(n, pub, 2)  # (the Safety System and the checker)
     _spin(n, 1.0)
 
     def step(_t: float) -> None:
