@@ -176,7 +176,7 @@ def _verdict(plan: AuditPlan, r: RequirementPlan, res: ClockPass, bindings: Bind
 def judged(plan: AuditPlan, r: RequirementPlan, v: Verdict, ticks: StreamTicks,
            ev: Evidence, ltl3: tuple[str, int | None, int | None],
            rob: tuple[float, int, int, list[tuple[int, int, float]]],
-           held: int | None | str = "row") -> None:
+           held: int | None | str = "row", at_cut: bool = False) -> None:
     """Set the verdict ``v`` of ``r`` as :func:`finalize` sets it on a trace without
     unknown ticks or damage, from what was decided over its ``ticks.n`` ticks without
     their columns (:mod:`fretc.audit.streamed`): the interval semantics' evidence ``ev``,
@@ -184,16 +184,26 @@ def judged(plan: AuditPlan, r: RequirementPlan, v: Verdict, ticks: StreamTicks,
     that tick, margin points (tick, time, value))``. The values around a violation
     (``v.values``, ``v.sources``) are the caller's: at :func:`shown_ticks`. ``held``: the
     log time (ns) of the message held at the robustness's tick (None: none); ``"row"``, a
-    CSV trace's: the tick's own time when not negative."""
+    CSV trace's: the tick's own time when not negative. ``at_cut``: the trace ends at a
+    cut, the verdict the one its ticks decide (:func:`fretc.audit.damage.verdict_at_damage`,
+    no obligation open at the cut: :func:`fretc.audit.streamed.decided_at_cut`)."""
     v.engine = "interval"
     v.intervals, v.triggers, v.violations = ev.intervals, ev.triggers, ev.violations
     status, tick, time = ltl3
     v.ltl3 = Ltl3(status, tick, time)
+    holds = ev.holds
+    if at_cut:
+        word, why = verdict_at_damage(holds, ev.vacuous, status, tick, ticks.n, ev, [],
+                                      has_ltl3=not r.offline)
+        if word == "unknown":
+            v.verdict, v.unknown_reason = "unknown", why
+            return
+        holds = word != "violated"
     value, at, at_time, points = rob
     shown = (at_time if at_time >= 0 else None) if held == "row" else held
     assert not isinstance(shown, str)  # (a CSV row's, or a held log time)
-    _robustness_fields(v, ev.holds, value, TimePoint(at, at_time, shown), points)
-    decided(plan, r, v, ev.holds, ev, status, tick, ticks.n, lambda: ticks)
+    _robustness_fields(v, holds, value, TimePoint(at, at_time, shown), points)
+    decided(plan, r, v, holds, ev, status, tick, ticks.n, lambda: ticks)
 
 
 def decided(plan: AuditPlan, r: RequirementPlan, v: Verdict, holds: bool,

@@ -28,8 +28,9 @@ stream cannot take it (:func:`unstreamed_reason`: a FRET temporal function, whic
 other ticks through the scope's ``Left``/``Right``; a probability bound, whose triggers are
 trials; ``--coverage``; an automaton too large for tables) or where the trace leaves some of
 its ticks unknown, which the three-valued judge decides: an ``unknown`` cell in a column it
-reads, a ``gap`` or ``cut`` row. Those are known only once read, so the file is then read a
-second time, keeping those requirements' columns (:class:`fretc.audit.log` does both). A
+reads, a ``gap`` row; and at a ``cut`` row, where its verdict at the cut may read an
+obligation still open there (:func:`decided_at_cut`). Those are known only once read, so
+the file is then read a second time, keeping those requirements' columns (:class:`fretc.audit.log` does both). A
 requirement whose comparisons read NaN (:data:`NAN_REASON`) or that reads ``unknown`` cells
 (:data:`UNKNOWN_CELLS`), on a trace without a ``gap`` row (:data:`GAP_ROW`), is instead
 judged in three-valued semantics as the file is read again
@@ -74,7 +75,7 @@ GAP_ROW = "a gap row"
 
 __all__ = ["ENABLED", "NAN_REASON", "UNKNOWN_CELLS", "GAP_ROW", "StreamedResult", "CsvStreams",
            "unstreamed_reason", "values_around", "RequirementStreams", "streams_of",
-           "feed_streams"]
+           "feed_streams", "decided_at_cut"]
 
 #: Whether CSV traces are judged while read (tests set it False to compare the two judges).
 ENABLED = True
@@ -99,6 +100,9 @@ class StreamedResult:
     robustness: RobustnessSummary
     n: int
     last_time: int
+    #: the trace ends at a ``cut`` row: the verdict is the one its intact rows decide
+    #: (:func:`fretc.audit.damage.verdict_at_damage`; :func:`decided_at_cut`)
+    cut: bool = False
 
 
 @dataclass
@@ -228,6 +232,11 @@ class CsvStreams:
                                          if unknown else None)
             if why is None and self.n == 0:
                 why = "no row"
+            if why == "a cut row" and not unknown and self.n:
+                got = self._at_cut(s)
+                if got is not None:
+                    self.results[i] = got
+                    continue
             if why is not None:
                 self.whole[i] = why
                 if s.nan_range is not None:
@@ -240,6 +249,36 @@ class CsvStreams:
             self.results[i] = StreamedResult(ev, times, (status, tick, time),
                                              s.rob.finish(), self.n, self.last_time)
         self.streams = []
+
+    def _at_cut(self, s: RequirementStreams) -> StreamedResult | None:
+        """What the streams of ``s`` decided over the rows before a ``cut`` row, when that
+        is the verdict at the cut (:func:`decided_at_cut`), else None."""
+        assert self.last_time is not None  # (n rows)
+        ev, times = s.interval.finish()
+        ltl3 = s.ltl3.finish() if s.ltl3 is not None else ("unknown", None, None)
+        if not decided_at_cut(s.r, ev, ltl3, self.n):
+            return None
+        return StreamedResult(ev, times, ltl3, s.rob.finish(), self.n, self.last_time,
+                              cut=True)
+
+
+def decided_at_cut(r: RequirementPlan, ev: Evidence,
+                   ltl3: tuple[str, int | None, int | None], n: int) -> bool:
+    """Whether the verdict of ``r`` at a cut after ``n`` ticks follows from its interval
+    evidence ``ev`` and LTL3 verdict ``ltl3`` alone (:func:`fretc.audit.damage.
+    verdict_at_damage` reads the obligations open at the cut only for a verdict that holds
+    and is not definite, and none is ever open for an ``immediately`` timing or a plain
+    ``always``/``never``: :func:`fretc.audit.damage.open_obligations`)."""
+    status, tick, _time = ltl3
+    definite = not r.offline and (
+        status == "satisfied" or (status == "violated" and tick is not None and tick < n))
+    if not ev.holds or definite:
+        return True
+    req = r.requirement
+    assert req is not None  # (streamed: parsed)
+    kind = "eventually" if req.timing.kind == "null" else req.timing.kind
+    return kind == "immediately" or (kind in ("always", "never")
+                                     and not req.scope.kind.startswith("only"))
 
 
 def feed_streams(s: RequirementStreams, columns: Mapping[str, np.ndarray], k: int,
