@@ -2,11 +2,13 @@
 scenario, seeds 1..N, each run with the hand-written SIF and ``cmd_vel_interceptor`` and with
 the shield in DIR (``fretc shield ... --emit python -b BINDINGS -o DIR``).
 
-    python bench/shield_scenarios.py --shield DIR [--seeds 20] [--jobs 1] [--scenario S]...
+    python bench/shield_scenarios.py --shield DIR [--shield DIR2 ...] [--seeds 20] [--jobs 1]
+                                     [--scenario S]...
 
-Per scenario and Safety System: how many runs completed the mission, were aborted (the SRAS
-made no progress, or ran out of time) or ended in contact (ground-truth clearance <= 0), the
-least clearance over the runs, and for the shield the ticks it overrode. Then each run the
+Per scenario and Safety System (the SIF, then each shield): how many runs completed the
+mission, were aborted (the SRAS made no progress, or ran out of time) or ended in contact
+(ground-truth clearance <= 0), the least clearance over the runs, the mean mission time of
+the completed runs (s of sim time), and for a shield the ticks it overrode. Then each run the
 hand-written SIF completed and the shield did not (scenario, seed, outcome), and each
 contact, and each run in which an assumption of the environment of the shield broke (a
 shield generated with ``--assume``). Exit 1 when the shield has a contact or leaves a mission the SIF completes
@@ -66,14 +68,16 @@ def _one(args: tuple) -> tuple:
         first = next(((t - fault.start, reasons, changed) for t, reasons, changed
                       in res.overrides if fault.start <= t <= fault.start + fault.duration),
                      None)
-    return (name, seed, "shield" if shield else "sif", outcome, res.min_clearance,
-            len(res.overrides), res.shield_ticks, first)
+    return (name, seed, shield or "sif", outcome, res.min_clearance,
+            len(res.overrides), res.shield_ticks, first, res.duration)
 
 
 def main() -> int:
     """Run the comparison (module docstring); the exit code."""
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--shield", required=True, help="the shield folder (--safety shield:DIR)")
+    ap.add_argument("--shield", required=True, action="append",
+                    help="the shield folder (--safety shield:DIR); repeatable: each shield "
+                         "a row beside the SIF's (with --fault: the first)")
     ap.add_argument("--seeds", type=int, default=20, help="seeds 1..N per scenario")
     ap.add_argument("--jobs", type=int, default=1, help="runs in parallel processes")
     ap.add_argument("--scenario", action="append", choices=list(SCENARIOS),
@@ -95,31 +99,37 @@ def main() -> int:
     a = ap.parse_args()
     names = a.scenario or list(SCENARIOS)
     if a.fault:
+        a.shield = a.shield[0]
         return _faults(ap, a, names)
-    work = [(n, k, s) for n in names for k in range(1, a.seeds + 1) for s in (None, a.shield)]
+    systems = [None, *a.shield]
+    work = [(n, k, s) for n in names for k in range(1, a.seeds + 1) for s in systems]
     if a.jobs > 1:
         with ProcessPoolExecutor(a.jobs) as pool:
             rows = list(pool.map(_one, work, chunksize=4))
     else:
         rows = [_one(w) for w in work]
-    by = {(n, k, s): (o, c, ov, t) for n, k, s, o, c, ov, t, _first in rows}
-    print(f"{'scenario':20s} {'safety':7s} completed aborted contact  least clearance  "
-          "overridden ticks")
+    by = {(n, k, s): (o, c, ov, t, d) for n, k, s, o, c, ov, t, _first, d in rows}
+    width = max(7, *(len(s) for s in a.shield))
+    print(f"{'scenario':20s} {'safety':{width}s} completed aborted contact  least clearance  "
+          "mission time (s, completed)  overridden ticks")
     for n in names:
-        for s in ("sif", "shield"):
-            done, aborted, contact, least, over = _outcomes(
-                [by[(n, k, s)] for k in range(1, a.seeds + 1)], s == "shield")
-            print(f"{n:20s} {s:7s} {done:9d} {aborted:7d} {contact:7d}  "
-                  f"{least:15.3f}  {over}")
-    lost = [(n, k, by[(n, k, 'shield')][0]) for n in names for k in range(1, a.seeds + 1)
-            if by[(n, k, "sif")][0] == "completed" and by[(n, k, "shield")][0] != "completed"]
-    contacts = [(n, k) for n in names for k in range(1, a.seeds + 1)
-                if by[(n, k, "shield")][0] == "contact"]
-    for n, k, o in lost:
-        print(f"completed by the SIF, not by the shield: {n} seed {k}: {o}")
-    for n, k in contacts:
-        print(f"shield contact: {n} seed {k}")
-    print(f"{len(work) // 2} runs per Safety System; shield: {len(contacts)} contacts, "
+        for s in ("sif", *a.shield):
+            runs = [by[(n, k, s)] for k in range(1, a.seeds + 1)]
+            done, aborted, contact, least, over = _outcomes([r[:4] for r in runs], s != "sif")
+            times = [r[4] for r in runs if r[0] == "completed"]
+            mean = f"{sum(times) / len(times):.1f}" if times else "-"
+            print(f"{n:20s} {s:{width}s} {done:9d} {aborted:7d} {contact:7d}  "
+                  f"{least:15.3f}  {mean:>27s}  {over}")
+    lost = [(n, k, s, by[(n, k, s)][0]) for s in a.shield for n in names
+            for k in range(1, a.seeds + 1)
+            if by[(n, k, "sif")][0] == "completed" and by[(n, k, s)][0] != "completed"]
+    contacts = [(n, k, s) for s in a.shield for n in names for k in range(1, a.seeds + 1)
+                if by[(n, k, s)][0] == "contact"]
+    for n, k, s, o in lost:
+        print(f"completed by the SIF, not by {s}: {n} seed {k}: {o}")
+    for n, k, s in contacts:
+        print(f"{s} contact: {n} seed {k}")
+    print(f"{len(names) * a.seeds} runs per Safety System; shields: {len(contacts)} contacts, "
           f"{len(lost)} missions the SIF completes left uncompleted")
     return 1 if lost or contacts else 0
 
