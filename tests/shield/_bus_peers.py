@@ -24,6 +24,9 @@ Roles:
   ``/cmd_vel`` (reliable) every 50 ms, Nav2's controller rate, each proposal its own number
   (``linear.x`` 0.2 m/s plus 0.1 mm/s a message: every answer tells which proposal it
   answers), for SECONDS; then it exits (a controller that dies).
+* ``recorder``: an independent recorder beside the node: ``/scan``, ``/cmd_vel`` and
+  ``/cmd_vel_filtered`` as CDR into the MCAP file OUT, each message's log time its receipt
+  time (the middleware's ``received_timestamp``), for SECONDS.
 * ``checker``: an independent node that writes, as JSON lines into OUT, each message it
   receives on ``/scan`` (its least range), ``/cmd_vel_filtered`` (linear.x, angular.z),
   ``/gwendolen_control`` (data), ``/cmd_vel`` (linear.x) and ``/diagnostics`` (level, message, values) with its
@@ -155,6 +158,37 @@ def controller20(seconds: float, _out: str) -> None:
     _spin(n, seconds, step, 0.05)
 
 
+def recorder(seconds: float, out: str) -> None:
+    from mcap.writer import Writer
+    from rosbags.typesys import Stores, get_typestore
+
+    store = get_typestore(Stores.ROS2_JAZZY)
+    types = {"/scan": "sensor_msgs/msg/LaserScan", "/cmd_vel": "geometry_msgs/msg/Twist",
+             "/cmd_vel_filtered": "geometry_msgs/msg/Twist"}
+    import importlib
+
+    n = rclpy.create_node("recorder")
+    with open(out, "wb") as fh:
+        w = Writer(fh)
+        w.start(profile="ros2", library="fretc-test-recorder")
+        channels = {}
+        for topic, typ in types.items():
+            text, _ = store.generate_msgdef(typ, ros_version=2)
+            sid = w.register_schema(name=typ, encoding="ros2msg", data=text.encode())
+            channels[topic] = w.register_channel(topic=topic, message_encoding="cdr",
+                                                 schema_id=sid)
+            pkg, _m, name = typ.split("/")
+            cls = getattr(importlib.import_module(pkg + ".msg"), name)
+
+            def cb(raw, info, topic=topic):
+                t = info["received_timestamp"]
+                w.add_message(channels[topic], log_time=t, publish_time=t, data=raw)
+
+            n.create_subscription(cls, topic, cb, BEST_EFFORT, raw=True)
+        _spin(n, seconds)
+        w.finish()
+
+
 def checker(seconds: float, out: str) -> None:
     from diagnostic_msgs.msg import DiagnosticArray
     from geometry_msgs.msg import Twist
@@ -191,7 +225,8 @@ def main() -> None:
     rclpy.init()
     try:
         {"lidar": lidar, "sector_lidar": sector_lidar, "controller": controller,
-         "controller20": controller20, "checker": checker}[role](seconds, out)
+         "controller20": controller20, "checker": checker,
+         "recorder": recorder}[role](seconds, out)
     finally:
         rclpy.try_shutdown()
 

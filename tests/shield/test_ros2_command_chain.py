@@ -9,6 +9,9 @@ independent rclpy node records what reaches it (tests/shield/_bus_peers.py).
 * **A controller that dies.** It falls silent: within the node's proposal timeout and a
   tick the command is the fallback's stop, and the last proposal is never sent again (the
   node re-sent it at every tick before, so the base's own command timeout never fired).
+  The graph recorded beside the node (receipt times) and audited with the node's allowance
+  (``T1: whenever cmd_silent ... within 2 ticks satisfy stopped``, ``cmd_silent`` the
+  command's age past the 300 ms timeout) and against S1..S3: 0 violated.
 * **An input bound to the proposal topic** (``proposed_velocity = "/cmd_vel.linear.x"``,
   speed and separation's S3) is read from the proposals: no tick reports it unread.
 * **A node started before its LiDAR** whose shield lost its state (its belief bounded to 4
@@ -91,8 +94,10 @@ def _of(rows: list[dict], topic: str) -> list[dict]:
 def test_proposals_pass_at_the_controllers_rate_and_a_dead_controller_gets_a_stop(tmp_path):
     pkg = _package(tmp_path / "speed", ["requirements/shield/speed_separation.fret"],
                    "requirements/shield/speed_separation.bindings.toml")
+    mcap = tmp_path / "graph.mcap"
     rows = _graph(pkg, tmp_path / "checker.jsonl",
-                  [(0.5, ["sector_lidar", "14", "far:360:360"]),
+                  [(0.0, ["recorder", "16", str(mcap)]),
+                   (0.5, ["sector_lidar", "14", "far:360:360"]),
                    (0.5, ["controller20", "6"])], 16)
     proposals, commands = _of(rows, "/cmd_vel"), _of(rows, "/cmd_vel_filtered")
     assert len(proposals) >= 100, len(proposals)
@@ -127,6 +132,27 @@ def test_proposals_pass_at_the_controllers_rate_and_a_dead_controller_gets_a_sto
     assert not [c for c in after if c["x"] != 0.0], [c for c in after if c["x"] != 0.0][:3]
     told = [r for r in _of(rows, "/diagnostics") if r["t"] > last + TIMEOUT_MS * MS]
     assert told and all("proposal absent" in r["message"] for r in told), told[:2]
+    _audit_with_the_allowance(tmp_path, mcap)
+
+
+def _audit_with_the_allowance(tmp_path: Path, mcap: Path) -> None:
+    """The recorded graph audited with the node's reaction allowance: the proposal timeout
+    (300 ms) as the command's age, then a tick and the latency budget (120 ms: 2 ticks) for
+    the stop to reach a reader; and S1..S3 as the node enforced them."""
+    reqs = tmp_path / "chain.fret"
+    reqs.write_text("@tick_period 100 ms\n"
+                    "T1: whenever cmd_silent collision_monitor shall within 2 ticks "
+                    "satisfy stopped\n", encoding="utf-8")
+    bindings = tmp_path / "chain.bindings.toml"
+    bindings.write_text('[tick]\nperiod = "100 ms"\ntime = "log"\n[variables]\n'
+                        'cmd_silent = "age(/cmd_vel) > 0.3"\n'
+                        'stopped = "abs(/cmd_vel_filtered.linear.x) < 1e-9"\n',
+                        encoding="utf-8")
+    speed = REPO / "requirements" / "shield" / "speed_separation"
+    got = CliRunner().invoke(main, ["audit", "-r", str(speed.with_suffix(".fret")), "-r",
+                                    str(reqs), "-b", str(speed) + ".bindings.toml", "-b",
+                                    str(bindings), str(mcap)])
+    assert got.exit_code == 0 and "0 violated" in got.output, got.output  # S1..S3, T1
 
 
 @pytest.mark.tor("TOR-SHD-005")
