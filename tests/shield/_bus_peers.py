@@ -20,7 +20,8 @@ Roles:
 * ``controller``: once its two readers match (the Safety System and the checker),
   ``/cmd_vel`` (geometry_msgs/Twist, reliable) every 100 ms proposing to drive on at
   0.3 m/s, for SECONDS.
-* ``controller20``: once its two readers match (the Safety System and the checker),
+* ``controller20``, with OUT the number of its readers (default 2: the Safety System and the
+  checker; a recorder makes 3): once they match,
   ``/cmd_vel`` (reliable) every 50 ms, Nav2's controller rate, each proposal its own number
   (``linear.x`` 0.2 m/s plus 0.1 mm/s a message: every answer tells which proposal it
   answers), for SECONDS; then it exits (a controller that dies).
@@ -140,12 +141,12 @@ def controller(seconds: float, _out: str) -> None:
     _spin(n, seconds, step)
 
 
-def controller20(seconds: float, _out: str) -> None:
+def controller20(seconds: float, out: str) -> None:
     from geometry_msgs.msg import Twist
 
     n = rclpy.create_node("controller")
     pub = n.create_publisher(Twist, "/cmd_vel", RELIABLE)
-    _wait_for(n, pub, 2)
+    _wait_for(n, pub, int(out or 2))
     _spin(n, 1.0)
     sent = [0]
 

@@ -98,7 +98,7 @@ def test_proposals_pass_at_the_controllers_rate_and_a_dead_controller_gets_a_sto
     rows = _graph(pkg, tmp_path / "checker.jsonl",
                   [(0.0, ["recorder", "16", str(mcap)]),
                    (0.5, ["sector_lidar", "14", "far:360:360"]),
-                   (0.5, ["controller20", "6"])], 16)
+                   (0.5, ["controller20", "6", "3"])], 16)
     proposals, commands = _of(rows, "/cmd_vel"), _of(rows, "/cmd_vel_filtered")
     assert len(proposals) >= 100, len(proposals)
     last = proposals[-1]["t"]
