@@ -476,6 +476,7 @@ class _LogRun:
             la.damage_time_ns = source.damage_time
         la.damage_cut = bool(source.damage_cut) or la.damage_cut
         la.cut_time_ns = getattr(source, "cut_start", None)
+        la.integrity = source.integrity_note()
         la.messages = dict(sorted(source.counts.items()))
         if self.problems or not la.problems:  # (else: only the damage found with the topics)
             la.problems = [problem_json(p) for p in self.problems.values()]

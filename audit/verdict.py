@@ -374,6 +374,9 @@ class LogAudit:
             bridged (``--bridge-gaps``).
         cut_time_ns: where a cut ends what was read (log time, ns: a truncation, nothing
             read after it; None when the log was read to its end).
+        integrity: why a changed byte of the log would read as data (a format or a file
+            without checksums: :meth:`fretc.logs.base.LogSource.integrity_note`), None when
+            every byte read was checked.
     """
 
     log: str
@@ -400,6 +403,7 @@ class LogAudit:
     warnings: list[str] = field(default_factory=list)
     gaps: list[dict[str, Any]] = field(default_factory=list)
     cut_time_ns: int | None = None
+    integrity: str | None = None
 
     def to_json(self) -> dict:
         """The log's audit as the audit JSON gives it (``docs/reference/audit.schema.json``)."""
@@ -434,6 +438,7 @@ class LogAudit:
             "gaps": [dict(g, start_s=_t(g["start_ns"], st)["s"], end_s=_t(g["end_ns"], st)["s"])
                      for g in self.gaps],
             "cut_time_ns": self.cut_time_ns, "cut_time_s": _t(self.cut_time_ns, st)["s"],
+            "integrity": self.integrity,
         }
 
 

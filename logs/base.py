@@ -324,6 +324,16 @@ class LogSource:
     def close(self) -> None:
         """Release resources (sources open files only while iterating; this is a no-op)."""
 
+    def integrity_note(self) -> str | None:
+        """Why a changed byte of this log would read as data (a sentence), or None when the
+        format checks every byte read (an MCAP file with its CRCs). A source of a format
+        without checksums (ROS 1 bags, rosbag2's SQLite, CSV traces, ULog, DataFlash)
+        says so; :class:`fretc.logs.mcap.source.McapSource` tells from the file."""
+        what = {"csv": "a CSV trace", "bag": "a ROS 1 bag", "rosbag2": "a rosbag2 folder",
+                "ulog": "a PX4 ULog", "dataflash": "a DataFlash log"}.get(
+                    self.kind, f"a {self.kind} log")
+        return f"{what} carries no checksum: a changed byte reads as data"
+
     def __repr__(self) -> str:
         return f"<{type(self).__name__} {self.kind} {self.path!r}>"
 

@@ -326,6 +326,12 @@ def _print_counts(console, logs: list[LogAudit], input_errors: bool,
            3: ": no violation, but a log is partial or had data problems, or a verdict is "
               "unknown", 5: ": a probability requirement is undecided (too few runs)"
            }.get(code, "")
+    unchecked = [la for la in logs if la.integrity and not la.error]
+    if unchecked:  # (the safety manual's limit: a changed byte reads as data)
+        example = unchecked[0]
+        console.print(f"integrity not checked in {len(unchecked)} of {len(logs)} log"
+                      f"{'s' if len(logs) != 1 else ''} ({short_log_name(example.log)}: "
+                      f"{example.integrity})", highlight=False)
     if code == 0 and allow_partial and any(incomplete(la) for la in logs):
         # --allow-partial changes the exit code, never a verdict: say what it let through
         why = (f": --allow-partial; {counts.get('unknown', 0)} unknown verdicts are not "

@@ -123,6 +123,12 @@ class McapSource(LogSource):
         self.partial = self._open_damage
         self._scanned: tuple[dict[int, Schema], dict[int, Channel]] | None = None
         self._data_crc_checked = False
+        #: the chunks opened by any pass, and those written without a CRC (uncompressed_crc
+        #: 0), each as (first and last message time, uncompressed size)
+        self._chunks: set[tuple] = set()
+        self._chunks_without_crc: set[tuple] = set()
+        #: the DataEnd record's data_section_crc seen by a linear pass (None: not seen)
+        self._data_section_crc: int | None = None
         if self._index is not None and missing_records(self._index) is not None:
             self._complete_index()
         if self._index is not None:
@@ -313,7 +319,9 @@ class McapSource(LogSource):
             opcode, length = RECORD_HEAD.unpack_from(raw)
             if opcode != Opcode.CHUNK or 9 + length != ci.chunk_length:
                 raise ValueError(f"no Chunk record at byte {ci.chunk_start_offset}")
-            return parse(parse_record(Opcode.CHUNK, raw[9:]))
+            chunk = parse_record(Opcode.CHUNK, raw[9:])
+            self._note_chunk(chunk)
+            return parse(chunk)
         except CRCValidationError as exc:
             self._gap(ci.message_start_time, ci.message_end_time, topics=self._chunk_topics(ci),
                       cause=P.CHUNK_CRC)
@@ -328,6 +336,29 @@ class McapSource(LogSource):
                           f"({type(exc).__name__}: {exc}); its messages are skipped: a "
                           f"gap in the log{GAP_NOTE}", ci.message_end_time)
         return damaged
+
+    def _note_chunk(self, chunk: Any) -> None:
+        """Note a chunk opened, and whether it carries a CRC."""
+        key = (getattr(chunk, "message_start_time", None),
+               getattr(chunk, "message_end_time", None), getattr(chunk, "uncompressed_size", 0))
+        self._chunks.add(key)
+        if getattr(chunk, "uncompressed_crc", 0) == 0:
+            self._chunks_without_crc.add(key)
+
+    def integrity_note(self) -> str | None:
+        """None when every chunk read carried its CRC (or, without chunks, the data
+        section has one); else what was not covered (MCAP spec: a writer may leave the
+        CRCs 0, "not computed")."""
+        if self._chunks:
+            if not self._chunks_without_crc:
+                return None
+            return (f"{len(self._chunks_without_crc)} of {len(self._chunks)} chunks carry no "
+                    "CRC (written without them): a changed byte there reads as data")
+        crc = (self._index.data_section_crc if self._index is not None
+               else self._data_section_crc)
+        if crc:
+            return None
+        return ("the file has no chunk or data-section CRC: a changed byte reads as data")
 
     def _chunk_topics(self, ci: ChunkIndex) -> frozenset | None:
         """The topics of the channels whose messages the chunk ``ci`` holds, from the
@@ -447,6 +478,7 @@ class _LinearPass:
 
     def _chunk(self, chunk: Chunk, pos: int) -> Iterator[Message]:
         src = self.src
+        src._note_chunk(chunk)
         try:
             records = chunk_records(chunk)
         except CRCValidationError as exc:
@@ -545,6 +577,7 @@ class _LinearPass:
             de = parse_record(Opcode.DATA_END, body)
         except RECORD_ERRORS:
             return
+        self.src._data_section_crc = de.data_section_crc
         if self.src.check_data_crc and de.data_section_crc not in (0, self.crc):
             self.src.partial = True
             self.src._problem(P.DATA_CRC, None, None,
