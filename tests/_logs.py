@@ -111,3 +111,45 @@ def write_mcap(path: Path, messages: list[tuple[str, str, int, Any]], *, ros1: b
                           publish_time=log_time + publish_offset, sequence=i)
         w.finish()
     return path
+
+
+#: bindings of one verdict per tracked object: ``dist`` and ``present`` of the track ``$track``
+TRACK_BINDINGS = '''[tick]
+period = "100 ms"
+[entities]
+track = "/tracks.tracks[:].id"
+[variables]
+dist = 'min(/tracks.tracks[:]{id==$track}.distance)'
+present = 'count(/tracks.tracks[:]{id==$track}.distance >= 0) = 1'
+'''
+
+#: bindings of one verdict per motor of ``/diagnostics``: ``motor_level`` and ``present``
+DIAG_BINDINGS = '''[tick]
+period = "100 ms"
+[entities]
+motor = { key = "/diagnostics.status[:].name", matching = "motor*" }
+[variables]
+motor_level = 'max(/diagnostics.status[:]{name==$motor}.level)'
+present = 'count(/diagnostics.status[:]{name==$motor}.level >= 0) = 1'
+'''
+
+
+def track_types() -> tuple[Any, Any]:
+    """The message classes (Track, TrackArray) of ``tracking_msgs``, registered once in ROS2."""
+    from rosbags.typesys import get_types_from_msg
+
+    if "tracking_msgs/msg/TrackArray" not in ROS2.types:
+        ROS2.register(get_types_from_msg("uint32 id\nfloat64 distance", "tracking_msgs/msg/Track"))
+        ROS2.register(get_types_from_msg("tracking_msgs/Track[] tracks",
+                                         "tracking_msgs/msg/TrackArray"))
+    return ROS2.types["tracking_msgs/msg/Track"], ROS2.types["tracking_msgs/msg/TrackArray"]
+
+
+def diag_array(statuses: Iterable[tuple[str, int]], hdr: Any = None) -> Any:
+    """A ``diagnostic_msgs/DiagnosticArray`` of (name, level) statuses; header stamped 0
+    unless ``hdr`` is given."""
+    St = T(ROS2, "diagnostic_msgs/msg/DiagnosticStatus")
+    Arr = T(ROS2, "diagnostic_msgs/msg/DiagnosticArray")
+    return Arr(header=header(0, frame="") if hdr is None else hdr,
+               status=[St(level=lvl, name=n, message="", hardware_id="", values=[])
+                       for n, lvl in statuses])

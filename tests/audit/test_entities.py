@@ -12,18 +12,12 @@ from pathlib import Path
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from _logs import ROS2, S, T, write_mcap
+from _logs import DIAG_BINDINGS, S, TRACK_BINDINGS, diag_array, write_mcap
+from _logs import track_types as _track_types
 from fretc.audit import AuditConfig, audit_log, load_plan
 from fretc.audit.verdict import Ltl3
 
-BINDINGS = '''[tick]
-period = "100 ms"
-[entities]
-motor = { key = "/diagnostics.status[:].name", matching = "motor*" }
-[variables]
-motor_level = 'max(/diagnostics.status[:]{name==$motor}.level)'
-present = 'count(/diagnostics.status[:]{name==$motor}.level >= 0) = 1'
-battery_ok = 'max(/diagnostics.status[:]{name=="battery"}.level) < 2'
+BINDINGS = DIAG_BINDINGS + '''battery_ok = 'max(/diagnostics.status[:]{name=="battery"}.level) < 2'
 '''
 FRET = ("@tick_period 100 ms\n"
         "M: in present mode the robot shall always satisfy motor_level < 2\n"
@@ -31,11 +25,7 @@ FRET = ("@tick_period 100 ms\n"
 
 
 def _diag(statuses):
-    St, Arr = T(ROS2, "diagnostic_msgs/msg/DiagnosticStatus"), T(ROS2, "diagnostic_msgs/msg/DiagnosticArray")
-    return Arr(header=T(ROS2, "std_msgs/msg/Header")(
-        stamp=T(ROS2, "builtin_interfaces/msg/Time")(sec=0, nanosec=0), frame_id=""),
-        status=[St(level=lvl, name=n, message="", hardware_id="", values=[])
-                for n, lvl in statuses])
+    return diag_array(statuses)
 
 
 def _audit(tmp: Path, log: Path):
@@ -90,24 +80,6 @@ def test_the_requirement_has_a_verdict_over_its_entities_in_the_reports(tmp_path
     assert "violated by: M[motor=motor_r]" in m.notes
 
 
-TRACK_BINDINGS = '''[tick]
-period = "100 ms"
-[entities]
-track = "/tracks.tracks[:].id"
-[variables]
-dist = 'min(/tracks.tracks[:]{id==$track}.distance)'
-present = 'count(/tracks.tracks[:]{id==$track}.distance >= 0) = 1'
-'''
-
-
-def _track_types():
-    from rosbags.typesys import get_types_from_msg
-
-    if "tracking_msgs/msg/TrackArray" not in ROS2.types:
-        ROS2.register(get_types_from_msg("uint32 id\nfloat64 distance", "tracking_msgs/msg/Track"))
-        ROS2.register(get_types_from_msg("tracking_msgs/Track[] tracks",
-                                         "tracking_msgs/msg/TrackArray"))
-    return ROS2.types["tracking_msgs/msg/Track"], ROS2.types["tracking_msgs/msg/TrackArray"]
 
 
 @settings(max_examples=6, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])

@@ -19,7 +19,8 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 import fretc.audit.entities.log as E
-from _logs import ROS2, S, T, write_mcap
+from _logs import ROS2, S, T, TRACK_BINDINGS, write_mcap
+from _logs import track_types as _track_types
 from fretc.audit import AuditConfig, audit_log, load_plan
 from fretc.cli import main
 
@@ -102,24 +103,6 @@ def test_one_read_for_every_entity_and_requirement(tmp_path, monkeypatch):
     assert got["T"].verdict == got["U"].verdict == "satisfied"
 
 
-TRACK_BINDINGS = '''[tick]
-period = "100 ms"
-[entities]
-track = "/tracks.tracks[:].id"
-[variables]
-dist = 'min(/tracks.tracks[:]{id==$track}.distance)'
-present = 'count(/tracks.tracks[:]{id==$track}.distance >= 0) = 1'
-'''
-
-
-def _track_types():
-    from rosbags.typesys import get_types_from_msg
-
-    if "tracking_msgs/msg/TrackArray" not in ROS2.types:
-        ROS2.register(get_types_from_msg("uint32 id\nfloat64 distance", "tracking_msgs/msg/Track"))
-        ROS2.register(get_types_from_msg("tracking_msgs/Track[] tracks",
-                                         "tracking_msgs/msg/TrackArray"))
-    return ROS2.types["tracking_msgs/msg/Track"], ROS2.types["tracking_msgs/msg/TrackArray"]
 
 
 def test_joints_by_name_are_entities(tmp_path):

@@ -18,21 +18,14 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from rosbags.typesys import get_types_from_msg
 
-from _logs import ROS2, S, write_mcap
+from _logs import ROS2, S, TRACK_BINDINGS, write_mcap
 from fretc.audit import AuditConfig, audit_log, load_plan
 from fretc.cli import main
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "logs"))
 import _encode  # noqa: E402  (the copies of a CDR MCAP in MCAP's other encodings)
 
-BINDINGS = '''[tick]
-period = "100 ms"
-[entities]
-track = "/tracks.tracks[:].id"
-[variables]
-dist = 'min(/tracks.tracks[:]{id==$track}.distance)'
-present = 'count(/tracks.tracks[:]{id==$track}.distance >= 0) = 1'
-'''
+BINDINGS = TRACK_BINDINGS
 FRET = "@tick_period 100 ms\nT: in present mode the robot shall always satisfy dist > 0.5\n"
 PAIRS = [(2**53 - 1, 2**53), (2**53, 2**53 + 1), (2**64 - 2, 2**64 - 1)]
 

@@ -19,8 +19,8 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from _c_monitors import build, c_compiler
-from _logs import ROS2, S, T, write_mcap
-from test_entities import _track_types
+from _logs import DIAG_BINDINGS, S, TRACK_BINDINGS, diag_array, write_mcap
+from _logs import track_types as _track_types
 from fretc.audit import AuditConfig, audit_log, load_plan
 from fretc.audit.sampled.csv import write_sampled_csv
 from fretc.cli import main
@@ -30,15 +30,7 @@ ROOT = Path(__file__).resolve().parents[2]
 SHARED = ROOT.parent / "shared" / "data" / "foreign_logs"
 DECIDED = ("satisfied", "vacuous", "violated")
 
-TRACKS = '''[tick]
-period = "100 ms"
-[entities]
-track = "/tracks.tracks[:].id"
-[variables]
-dist = 'min(/tracks.tracks[:]{id==$track}.distance)'
-present = 'count(/tracks.tracks[:]{id==$track}.distance >= 0) = 1'
-near = 'min(/tracks.tracks[:].distance) < 0.5'
-'''
+TRACKS = TRACK_BINDINGS + "near = 'min(/tracks.tracks[:].distance) < 0.5'\n"
 TRACK_FRET = ("@tick_period 100 ms\n"
               "T: in present mode the robot shall always satisfy dist > 0.5\n"
               "U: upon present the robot shall within 3 ticks satisfy dist > 1.5\n"
@@ -118,23 +110,11 @@ def test_tracked_objects_written_as_a_csv_give_the_audit_of_the_log(tmp_path_fac
     assert sum(v.requirement.startswith("T[") for v in verdicts) == len(ids)
 
 
-DIAG = '''[tick]
-period = "100 ms"
-[entities]
-motor = { key = "/diagnostics.status[:].name", matching = "motor*" }
-[variables]
-motor_level = 'max(/diagnostics.status[:]{name==$motor}.level)'
-present = 'count(/diagnostics.status[:]{name==$motor}.level >= 0) = 1'
-'''
+DIAG = DIAG_BINDINGS
 
 
 def _diag(statuses):
-    St = T(ROS2, "diagnostic_msgs/msg/DiagnosticStatus")
-    Arr = T(ROS2, "diagnostic_msgs/msg/DiagnosticArray")
-    return Arr(header=T(ROS2, "std_msgs/msg/Header")(
-        stamp=T(ROS2, "builtin_interfaces/msg/Time")(sec=0, nanosec=0), frame_id=""),
-        status=[St(level=lvl, name=n, message="", hardware_id="", values=[])
-                for n, lvl in statuses])
+    return diag_array(statuses)
 
 
 @settings(max_examples=8, deadline=None,

@@ -15,22 +15,15 @@ import pytest
 pytest.importorskip("foxglove")
 pytest.importorskip("websockets")
 
-from _logs import ROS2, S, float64, write_mcap  # noqa: E402
+from _logs import DIAG_BINDINGS, ROS2, S, TRACK_BINDINGS, float64, write_mcap  # noqa: E402
+from _logs import track_types as _types  # noqa: E402
 from fretc.audit import AuditConfig, audit_log, load_plan  # noqa: E402
 from fretc.live.websocket.serve import FoxgloveServer, advertise_mcap, replay_mcap  # noqa: E402
 from test_watch import _watch_trace  # noqa: E402
 
 pytestmark = pytest.mark.watch
 
-BINDINGS = '''[tick]
-period = "100 ms"
-[entities]
-track = "/tracks.tracks[:].id"
-[variables]
-dist = 'min(/tracks.tracks[:]{id==$track}.distance)'
-present = 'count(/tracks.tracks[:]{id==$track}.distance >= 0) = 1'
-slow = '/speed.data < 2'
-'''
+BINDINGS = TRACK_BINDINGS + "slow = '/speed.data < 2'\n"
 FRET_T = "T: in present mode the robot shall always satisfy dist > 0.5\n"
 FRET_P = "P: the robot shall always satisfy slow\n"
 
@@ -41,14 +34,6 @@ ROWS = [{1: 2.0}, {1: 2.0, 2: 0.8}, {2: 0.8, 3: 2.0}, {2: 0.4, 3: 2.0}, {3: 2.0}
 SPEED = [1.0] * 9 + [2.5] + [1.0] * 10  # P violated at message 9
 
 
-def _types():
-    from rosbags.typesys import get_types_from_msg
-
-    if "tracking_msgs/msg/TrackArray" not in ROS2.types:
-        ROS2.register(get_types_from_msg("uint32 id\nfloat64 distance", "tracking_msgs/msg/Track"))
-        ROS2.register(get_types_from_msg("tracking_msgs/Track[] tracks",
-                                         "tracking_msgs/msg/TrackArray"))
-    return ROS2.types["tracking_msgs/msg/Track"], ROS2.types["tracking_msgs/msg/TrackArray"]
 
 
 def _log(tmp: Path, rows, speed=None) -> Path:
@@ -272,14 +257,6 @@ def _diagnostics_log(tmp: Path) -> Path:
     return write_mcap(tmp / "diag.mcap", msgs)
 
 
-DIAG_BINDINGS = '''[tick]
-period = "100 ms"
-[entities]
-motor = { key = "/diagnostics.status[:].name", matching = "motor*" }
-[variables]
-motor_level = 'max(/diagnostics.status[:]{name==$motor}.level)'
-present = 'count(/diagnostics.status[:]{name==$motor}.level >= 0) = 1'
-'''
 FRET_M = "M: in present mode the robot shall always satisfy motor_level < 2\n"
 
 
