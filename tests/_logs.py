@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import functools
 from pathlib import Path
 from typing import Any
 from collections.abc import Iterable
@@ -153,3 +154,14 @@ def diag_array(statuses: Iterable[tuple[str, int]], hdr: Any = None) -> Any:
     return Arr(header=header(0, frame="") if hdr is None else hdr,
                status=[St(level=lvl, name=n, message="", hardware_id="", values=[])
                        for n, lvl in statuses])
+
+
+@functools.lru_cache(maxsize=8)
+def written_plan(folder: str, name: str, requirements: str) -> Any:
+    """The audit's plan of ``requirements`` written to ``folder/name`` (cached: a module's
+    hypothesis examples share it)."""
+    from fretc.audit import AuditConfig, load_plan
+
+    fret = Path(folder) / name
+    fret.write_text(requirements, encoding="utf-8")
+    return load_plan(AuditConfig(requirements=(str(fret),)))

@@ -24,7 +24,8 @@ import fretc.audit.streamed as streamed
 import fretc.logs.csv.read as csv_read
 import fretc.monitors.robustness as robustness
 import fretc.signals.blocks as blocks
-from fretc.audit import AuditConfig, audit_log, load_plan
+from _logs import written_plan
+from fretc.audit import audit_log
 
 REQUIREMENTS = """\
 R1: the sw shall always satisfy x < 2
@@ -38,18 +39,9 @@ R7: the sw shall always satisfy x < 2.5 & !(p & q)
 XS = ["0.0", "0.5", "1.0", "1.5", "2.25", "-1", "3.5", "nan"]
 
 
-@functools.lru_cache(maxsize=1)
-def _plan(folder: str):
-    from pathlib import Path
-
-    fret = Path(folder) / "chunks.fret"
-    fret.write_text(REQUIREMENTS, encoding="utf-8")
-    return load_plan(AuditConfig(requirements=(str(fret),)))
-
-
 @pytest.fixture(scope="module")
 def plan(tmp_path_factory):
-    return _plan(str(tmp_path_factory.mktemp("chunks")))
+    return written_plan(str(tmp_path_factory.mktemp("chunks")), "chunks.fret", REQUIREMENTS)
 
 
 @pytest.fixture(autouse=True)

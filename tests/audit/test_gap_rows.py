@@ -9,7 +9,6 @@ where one tick in the gap and two ticks disagree are unknown."""
 
 from __future__ import annotations
 
-import functools
 import itertools
 import json
 import random
@@ -19,7 +18,8 @@ import numpy as np
 import pytest
 from hypothesis import given, settings, strategies as st
 
-from fretc.audit import AuditConfig, audit_log, load_plan
+from _logs import written_plan
+from fretc.audit import audit_log
 from fretc.audit.verdict import audit_json
 from fretc.monitors.interval import verdict_of
 
@@ -41,16 +41,9 @@ XS = (0.0, 4.5)
 VALUES = {"a": ("0", "1"), "b": ("0", "1"), "x": ("0", "4.5")}
 
 
-@functools.lru_cache(maxsize=1)
-def _plan(folder: str):
-    fret = Path(folder) / "gaps.fret"
-    fret.write_text(REQUIREMENTS, encoding="utf-8")
-    return load_plan(AuditConfig(requirements=(str(fret),)))
-
-
 @pytest.fixture(scope="module")
 def plan(tmp_path_factory):
-    return _plan(str(tmp_path_factory.mktemp("gap_rows")))
+    return written_plan(str(tmp_path_factory.mktemp("gap_rows")), "gaps.fret", REQUIREMENTS)
 
 
 def _verdicts(plan, path: Path) -> dict[str, str]:

@@ -17,7 +17,6 @@ counted, and the fallback to the whole-trace judge happens only where the module
 
 from __future__ import annotations
 
-import functools
 import json
 import random
 from pathlib import Path
@@ -34,6 +33,7 @@ import fretc.audit.streamed as streamed
 import fretc.audit.streamed_three as streamed_three
 import fretc.logs.csv.read as csv_read
 import fretc.monitors.robustness as robustness
+from _logs import written_plan
 from fretc.audit import AuditConfig, audit_log, load_plan
 from fretc.audit.sampled.csv import write_sampled_csv
 from fretc.audit.verdict import audit_json
@@ -66,11 +66,8 @@ WHOLE = {"R18", "R19"}
 XS = ["0.0", "0.5", "1.0", "1.5", "2.25", "-1", "3.5", "4", "0", "1"]
 
 
-@functools.lru_cache(maxsize=1)
 def _plan(folder: str):
-    fret = Path(folder) / "streamed.fret"
-    fret.write_text(REQUIREMENTS, encoding="utf-8")
-    return load_plan(AuditConfig(requirements=(str(fret),)))
+    return written_plan(folder, "streamed.fret", REQUIREMENTS)
 
 
 @pytest.fixture(scope="module")

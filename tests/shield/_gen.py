@@ -135,3 +135,21 @@ def csv_cell(x) -> str:
     """A value as a cell of the C runner's input CSV (``true``/``false``, or a float's
     repr: ``nan``, ``inf`` too)."""
     return ("true" if x else "false") if isinstance(x, bool) else repr(float(x))
+
+
+def fret_var(name: str, kind: str, assignment: str = "", data_type: str = "boolean") -> dict:
+    """One variable of a FRET project export (component ``ctrl`` of project ``P``)."""
+    return {"project": "P", "component_name": "ctrl", "variable_name": name,
+            "idType": kind, "dataType": data_type, "assignment": assignment}
+
+
+def fret_export(tmp_path: Path, texts: list[str], variables: list[dict]) -> Path:
+    """A FRET project export ``p.json`` of the requirements ``texts`` (R1, R2, ...) and
+    ``variables`` (from :func:`fret_var`)."""
+    import json
+
+    path = tmp_path / "p.json"
+    path.write_text(json.dumps({"requirements": [
+        {"reqid": f"R{k + 1}", "project": "P", "fulltext": t} for k, t in enumerate(texts)],
+        "variables": variables}), encoding="utf-8")
+    return path

@@ -6,28 +6,19 @@ column is its own values, where the audit computes it."""
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
 from click.testing import CliRunner
 
 from fretc.cli import main
+from _gen import fret_export, fret_var
 
 
 def _export(tmp_path: Path, texts: list[str]) -> Path:
-    def var(name: str, kind: str, assignment: str = "", data_type: str = "boolean") -> dict:
-        return {"project": "P", "component_name": "ctrl", "variable_name": name,
-                "idType": kind, "dataType": data_type, "assignment": assignment}
-
-    path = tmp_path / "p.json"
-    path.write_text(json.dumps({"requirements": [
-        {"reqid": f"R{k + 1}", "project": "P", "fulltext": t} for k, t in enumerate(texts)],
-        "variables": [var("b", "Input"), var("o", "Output"),
-                      var("latched", "Internal", "b -> (b xor pre latched)"),
-                      var("x", "Input", data_type="double"),
-                      var("g", "Internal", "b -> (b xor (pre g and x > pre x))")]}),
-        encoding="utf-8")
-    return path
+    return fret_export(tmp_path, texts, [fret_var("b", "Input"), fret_var("o", "Output"),
+                                         fret_var("latched", "Internal", "b -> (b xor pre latched)"),
+                                         fret_var("x", "Input", data_type="double"),
+                                         fret_var("g", "Internal", "b -> (b xor (pre g and x > pre x))")])
 
 
 def test_shield_refuses_a_stream_variable_by_name(tmp_path):

@@ -22,23 +22,15 @@ from fretc.fretish.fret_variables import fret_variables
 from fretc.shield.runtime import ShieldRuntime
 
 LATCH = "false -> (enter or (pre m and not exit))"
+from _gen import fret_export, fret_var
 
 
 def _export(tmp_path: Path, texts: list[str]) -> Path:
-    def var(name: str, kind: str, assignment: str = "", data_type: str = "boolean") -> dict:
-        return {"project": "P", "component_name": "ctrl", "variable_name": name,
-                "idType": kind, "dataType": data_type, "assignment": assignment}
-
-    path = tmp_path / "p.json"
-    path.write_text(json.dumps({"requirements": [
-        {"reqid": f"R{k + 1}", "project": "P", "fulltext": t} for k, t in enumerate(texts)],
-        "variables": [var("enter", "Input"), var("exit", "Input"), var("o", "Output"),
-                      var("x", "Input", data_type="double"),
-                      var("m", "Internal", LATCH),
-                      var("t", "Internal", "false -> not pre t"),
-                      var("h", "Internal", "x -> if enter then x else pre h", "double")]}),
-        encoding="utf-8")
-    return path
+    return fret_export(tmp_path, texts, [fret_var("enter", "Input"), fret_var("exit", "Input"), fret_var("o", "Output"),
+                                         fret_var("x", "Input", data_type="double"),
+                                         fret_var("m", "Internal", LATCH),
+                                         fret_var("t", "Internal", "false -> not pre t"),
+                                         fret_var("h", "Internal", "x -> if enter then x else pre h", "double")])
 
 
 def _latch(path: Path, ticks: list[tuple[bool, bool]]) -> list[bool]:

@@ -28,25 +28,17 @@ from fretc.shield.runtime import ShieldRuntime
 from _c_monitors import build, needs_cc
 
 TOGGLE = "false -> (a xor pre t)"
+from _gen import fret_export, fret_var
 
 
 def _export(tmp_path: Path, texts: list[str]) -> Path:
-    def var(name: str, kind: str, assignment: str = "", data_type: str = "boolean") -> dict:
-        return {"project": "P", "component_name": "ctrl", "variable_name": name,
-                "idType": kind, "dataType": data_type, "assignment": assignment}
-
-    path = tmp_path / "p.json"
-    path.write_text(json.dumps({"requirements": [
-        {"reqid": f"R{k + 1}", "project": "P", "fulltext": t} for k, t in enumerate(texts)],
-        "variables": [var("a", "Input"), var("o", "Output"),
-                      var("x", "Input", data_type="double"),
-                      var("t", "Internal", TOGGLE),
-                      var("m", "Internal", "false -> (a or pre m)"),
-                      var("g", "Internal", "false -> ((x > pre x) xor pre g)"),
-                      var("k", "Internal", "false -> ((x > 1.0) xor pre k)"),
-                      var("h", "Internal", "x -> if a then x else pre h", "double")]}),
-        encoding="utf-8")
-    return path
+    return fret_export(tmp_path, texts, [fret_var("a", "Input"), fret_var("o", "Output"),
+                                         fret_var("x", "Input", data_type="double"),
+                                         fret_var("t", "Internal", TOGGLE),
+                                         fret_var("m", "Internal", "false -> (a or pre m)"),
+                                         fret_var("g", "Internal", "false -> ((x > pre x) xor pre g)"),
+                                         fret_var("k", "Internal", "false -> ((x > 1.0) xor pre k)"),
+                                         fret_var("h", "Internal", "x -> if a then x else pre h", "double")])
 
 
 def _toggle(path: Path, a: list[bool]) -> list[bool]:
