@@ -165,3 +165,14 @@ def written_plan(folder: str, name: str, requirements: str) -> Any:
     fret = Path(folder) / name
     fret.write_text(requirements, encoding="utf-8")
     return load_plan(AuditConfig(requirements=(str(fret),)))
+
+
+def audit_written(tmp_path: Path, name: str, fret: str, bindings: str, log: Any) -> Any:
+    """The audit of ``log`` by ``fret`` written to ``tmp_path/name.fret`` beside its
+    ``bindings`` (``name.bindings.toml``)."""
+    from fretc.audit import AuditConfig, audit_log, load_plan
+
+    (tmp_path / f"{name}.fret").write_text(fret)
+    (tmp_path / f"{name}.bindings.toml").write_text(bindings)
+    return audit_log(load_plan(AuditConfig(requirements=(str(tmp_path / f"{name}.fret"),))),
+                     str(log))

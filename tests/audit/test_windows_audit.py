@@ -15,7 +15,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from mcap.reader import make_reader
 
-from _logs import MS, S, boolean, float64, write_mcap
+from _logs import MS, S, audit_written, boolean, float64, write_mcap
 from fretc.audit import AuditConfig, audit_log, load_plan
 
 FRET = ("@tick_period 100 ms\n"
@@ -112,13 +112,12 @@ def test_a_window_meeting_a_gap_is_unknown_for_its_span(tmp_path):
     data = bytearray(log.read_bytes())
     data[bad.chunk_start_offset + bad.chunk_length // 2] ^= 0x20
     log.write_bytes(bytes(data))
-    (tmp_path / "w.fret").write_text("@tick_period 100 ms\n"
-                                     "W: the robot shall always satisfy mean_current < 10\n"
-                                     "H: the robot shall always satisfy held < 10\n")
-    (tmp_path / "w.bindings.toml").write_text(
-        '[tick]\nperiod = "100 ms"\n[variables]\nmean_current = "mean(/battery.data, 2s)"\n'
-        'held = "/battery.data"\n')
-    la = audit_log(load_plan(AuditConfig(requirements=(str(tmp_path / "w.fret"),))), str(log))
+    la = audit_written(tmp_path, "w", "@tick_period 100 ms\n"
+                                      "W: the robot shall always satisfy mean_current < 10\n"
+                                      "H: the robot shall always satisfy held < 10\n",
+                                      
+                                      '[tick]\nperiod = "100 ms"\n[variables]\nmean_current = "mean(/battery.data, 2s)"\n'
+                                      'held = "/battery.data"\n', str(log))
     v = {x.requirement: x for x in la.verdicts}
     (g,) = la.gaps
     ticks = np.arange(S + 2 * S, S + 300 * S // 10, S // 10)  # the window's complete ticks
@@ -133,11 +132,10 @@ def test_a_window_that_never_fills_is_named(tmp_path):
     of it the log gives."""
     log = write_mcap(tmp_path / "w.mcap", [("/battery", "std_msgs/msg/Float64", S + k * 100 * MS,
                                             float64(1.0)) for k in range(100)])
-    (tmp_path / "w.fret").write_text("@tick_period 100 ms\n"
-                                     "MEAN: the robot shall always satisfy mean_current < 10\n")
-    (tmp_path / "w.bindings.toml").write_text('[tick]\nperiod = "100 ms"\n[variables]\n'
-                                              'mean_current = "mean(/battery.data, 1e9 s)"\n')
-    la = audit_log(load_plan(AuditConfig(requirements=(str(tmp_path / "w.fret"),))), str(log))
+    la = audit_written(tmp_path, "w", "@tick_period 100 ms\n"
+                                      "MEAN: the robot shall always satisfy mean_current < 10\n",
+                                      '[tick]\nperiod = "100 ms"\n[variables]\n'
+                                      'mean_current = "mean(/battery.data, 1e9 s)"\n', str(log))
     (v,) = la.verdicts
     assert v.verdict == "error" and "no message on the bound topics" not in v.error, v.error
     assert "mean_current" in v.error and "never complete" in v.error, v.error

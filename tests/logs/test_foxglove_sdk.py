@@ -13,7 +13,7 @@ import pytest
 
 foxglove = pytest.importorskip("foxglove")
 
-from fretc.audit import AuditConfig, audit_log, load_plan  # noqa: E402
+from _logs import audit_written  # noqa: E402
 
 S = 1_000_000_000
 TICK = S // 10
@@ -59,16 +59,15 @@ def _raw(path: Path):
 
 def test_an_sdk_log_audits_as_recomputed_from_its_raw_messages(tmp_path):
     log = _write(tmp_path / "sdk.mcap")
-    (tmp_path / "f.fret").write_text(
-        "@tick_period 100 ms\n"
-        "S1: the robot shall always satisfy speed < 1.5\n"
-        "S2: the robot shall always satisfy manual -> speed > 1\n"
-        "E1: the robot shall never satisfy error_logged\n")
-    (tmp_path / "f.bindings.toml").write_text(
-        '[tick]\nperiod = "100 ms"\n[variables]\nspeed = "/state.speed"\n'
-        'manual = \'/state.mode = "manual"\'\n'
-        'error_logged = "any_of_messages(/log.level >= ERROR)"\n')
-    la = audit_log(load_plan(AuditConfig(requirements=(str(tmp_path / "f.fret"),))), str(log))
+    la = audit_written(tmp_path, "f", 
+                                      "@tick_period 100 ms\n"
+                                      "S1: the robot shall always satisfy speed < 1.5\n"
+                                      "S2: the robot shall always satisfy manual -> speed > 1\n"
+                                      "E1: the robot shall never satisfy error_logged\n",
+                                      
+                                      '[tick]\nperiod = "100 ms"\n[variables]\nspeed = "/state.speed"\n'
+                                      'manual = \'/state.mode = "manual"\'\n'
+                                      'error_logged = "any_of_messages(/log.level >= ERROR)"\n', str(log))
     got = {v.requirement: v for v in la.verdicts}
     st, lg = _raw(log)
     # independent: ticks on the multiples of 100 ms from the first at or after the first

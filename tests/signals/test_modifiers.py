@@ -13,8 +13,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from _logs import MS, S, float64, write_mcap
-from fretc.audit import AuditConfig, audit_log, load_plan
+from _logs import MS, S, audit_written, float64, write_mcap
 from fretc.common.problems import BindingError
 from fretc.logs import open_log
 from fretc.signals.arrays import sample_arrays
@@ -71,11 +70,10 @@ def test_a_speed_limit_on_a_position_derivative_audits(tmp_path):
     xs = [0.1 * i for i in range(10)] + [1.4, 1.5, 1.6]
     msgs = [("/x", "std_msgs/msg/Float64", S + i * S // 10, float64(x)) for i, x in enumerate(xs)]
     log = write_mcap(tmp_path / "x.mcap", msgs)
-    (tmp_path / "s.fret").write_text("@tick_period 100 ms\nS1: robot shall always satisfy "
-                                     "speed <= 2\n")
-    (tmp_path / "s.bindings.toml").write_text('[tick]\nperiod = "100 ms"\n[variables]\n'
-                                              'speed = "/x.data@derivative@abs"\n')
-    la = audit_log(load_plan(AuditConfig(requirements=(str(tmp_path / "s.fret"),))), str(log))
+    la = audit_written(tmp_path, "s", "@tick_period 100 ms\nS1: robot shall always satisfy "
+                                      "speed <= 2\n",
+                                      '[tick]\nperiod = "100 ms"\n[variables]\n'
+                                      'speed = "/x.data@derivative@abs"\n', str(log))
     (v,) = la.verdicts
     assert v.verdict == "violated" and v.warmup_ticks == 1
     assert v.first_violation.at.time_ns == S + 10 * S // 10

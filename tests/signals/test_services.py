@@ -10,8 +10,8 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+from _logs import audit_written
 from _services import write_service_bag
-from fretc.audit import AuditConfig, audit_log, load_plan
 from fretc.common.problems import BindingError
 from fretc.logs import open_log
 from fretc.signals.arrays import sample_arrays
@@ -84,17 +84,16 @@ def test_a_service_requirement_audits_a_rosbag2_with_service_events(tmp_path):
               (2 * S, 0, 2, 1, True), (2 * S + MS, 0, 1, 2, True),
               (2 * S + 60 * MS, 3, 1, 2, True), (2 * S + 300 * MS, 3, 2, 1, False)]
     log = write_service_bag(tmp_path, events)
-    (tmp_path / "s.fret").write_text(
-        "@tick_period 10 ms\n"
-        "ANSWERED: the arm_service shall always satisfy waiting_arm <= 0.1\n"
-        "SUCCESS: the arm_service shall always satisfy arm_succeeded\n"
-        "UPON: upon arm_called the arm_service shall within 100 milliseconds satisfy "
-        "arm_answered\n")
-    (tmp_path / "s.bindings.toml").write_text(
-        '[tick]\nperiod = "10 ms"\n[variables]\nwaiting_arm = "waiting(/arm)"\n'
-        'arm_succeeded = "all_of_messages(all(/arm/_service_event.response[:].success))"\n'
-        'arm_called = "called(/arm)"\narm_answered = "answered(/arm)"\n')
-    la = audit_log(load_plan(AuditConfig(requirements=(str(tmp_path / "s.fret"),))), str(log))
+    la = audit_written(tmp_path, "s", 
+                                      "@tick_period 10 ms\n"
+                                      "ANSWERED: the arm_service shall always satisfy waiting_arm <= 0.1\n"
+                                      "SUCCESS: the arm_service shall always satisfy arm_succeeded\n"
+                                      "UPON: upon arm_called the arm_service shall within 100 milliseconds satisfy "
+                                      "arm_answered\n",
+                                      
+                                      '[tick]\nperiod = "10 ms"\n[variables]\nwaiting_arm = "waiting(/arm)"\n'
+                                      'arm_succeeded = "all_of_messages(all(/arm/_service_event.response[:].success))"\n'
+                                      'arm_called = "called(/arm)"\narm_answered = "answered(/arm)"\n', str(log))
     v = {x.requirement: x for x in la.verdicts}
     assert v["ANSWERED"].verdict == "violated", v["ANSWERED"].error
     assert v["ANSWERED"].first_violation.at.time_ns == 2 * S + 110 * MS  # first tick past 100 ms
@@ -118,15 +117,14 @@ def test_action_topics_as_kilted_records_them_decode_and_bind(tmp_path):
 
     log = write_action_bag(tmp_path, [(S + k * 100 * MS, 1, list(range(k + 1))) for k in range(10)],
                            [(S, [(1, 2)]), (2 * S, [(1, 4)])])
-    (tmp_path / "a.fret").write_text(
-        "@tick_period 100 ms\n"
-        "DONE: the fib_server shall eventually satisfy succeeded\n"
-        "SHORT: the fib_server shall always satisfy feedback_length <= 8\n")
-    (tmp_path / "a.bindings.toml").write_text(
-        '[tick]\nperiod = "100 ms"\n[variables]\n'
-        'succeeded = "count(/fib/_action/status.status_list[:]{status==STATUS_SUCCEEDED}.status) = 1"\n'
-        'feedback_length = "len(/fib/_action/feedback.feedback.sequence)"\n')
-    la = audit_log(load_plan(AuditConfig(requirements=(str(tmp_path / "a.fret"),))), str(log))
+    la = audit_written(tmp_path, "a", 
+                                      "@tick_period 100 ms\n"
+                                      "DONE: the fib_server shall eventually satisfy succeeded\n"
+                                      "SHORT: the fib_server shall always satisfy feedback_length <= 8\n",
+                                      
+                                      '[tick]\nperiod = "100 ms"\n[variables]\n'
+                                      'succeeded = "count(/fib/_action/status.status_list[:]{status==STATUS_SUCCEEDED}.status) = 1"\n'
+                                      'feedback_length = "len(/fib/_action/feedback.feedback.sequence)"\n', str(log))
     v = {x.requirement: x for x in la.verdicts}
     assert v["DONE"].verdict == "satisfied", v["DONE"].error
     assert v["SHORT"].verdict == "violated", v["SHORT"].error
@@ -184,11 +182,10 @@ def test_every_accepted_goal_ends_with_a_result_within_its_bound(tmp_path):
     status = [(S, [(1, 1)]), (S + 200 * MS, [(1, 2), (2, 1)]), (S + 400 * MS, [(1, 4), (2, 2)]),
               (2 * S, [(1, 4), (2, 6)])]
     log = write_action_bag(tmp_path, [], status)
-    (tmp_path / "g.fret").write_text(
-        "@tick_period 100 ms\nRESULT: the fib_server shall always satisfy goal_wait <= 0.5\n")
-    (tmp_path / "g.bindings.toml").write_text(
-        '[tick]\nperiod = "100 ms"\n[variables]\ngoal_wait = "goal_waiting(/fib)"\n')
-    la = audit_log(load_plan(AuditConfig(requirements=(str(tmp_path / "g.fret"),))), str(log))
+    la = audit_written(tmp_path, "g", 
+                                      "@tick_period 100 ms\nRESULT: the fib_server shall always satisfy goal_wait <= 0.5\n",
+                                      
+                                      '[tick]\nperiod = "100 ms"\n[variables]\ngoal_wait = "goal_waiting(/fib)"\n', str(log))
     v = la.verdicts[0]
     assert v.verdict == "violated", v.error
     assert v.first_violation.at.time_ns == S + 800 * MS  # goal 2 has waited 0.6 s
@@ -213,10 +210,9 @@ def test_past_the_bound_of_open_calls_the_requirement_is_an_error_naming_it(tmp_
         status = [(S + k * 10 * MS, [(g, 1) for g in range(1, k + 2)]) for k in range(6)]
         log = write_action_bag(tmp_path, [], status)
         expr, topic = "goal_waiting(/fib)", "/fib"
-    (tmp_path / "w.fret").write_text("@tick_period 10 ms\nW: the s shall always satisfy w <= 9\n")
-    (tmp_path / "w.bindings.toml").write_text(
-        f'[tick]\nperiod = "10 ms"\n[variables]\nw = "{expr}"\n')
-    la = audit_log(load_plan(AuditConfig(requirements=(str(tmp_path / "w.fret"),))), str(log))
+    la = audit_written(tmp_path, "w", "@tick_period 10 ms\nW: the s shall always satisfy w <= 9\n",
+                                      
+                                      f'[tick]\nperiod = "10 ms"\n[variables]\nw = "{expr}"\n', str(log))
     v = la.verdicts[0]
     assert v.verdict == "error" and "more than 3" in v.error and topic in v.error, v.error
     b = make_bindings({"w": expr}, TickSpec(period_ns=10 * MS))
