@@ -100,3 +100,29 @@ def step_all(monitor, cols, length):
 
 __all__ = ["KEYS", "requirement", "compiled", "load_module", "random_trace", "samples",
            "step_all", "monitor_source"]
+
+
+_COMPILED: dict = {}
+
+
+def compiled_of(text: str):
+    """(compiled requirement ``R: text``, its monitor source), cached by text."""
+    if text not in _COMPILED:
+        import tempfile
+        from pathlib import Path
+
+        from fretc.compiler.build import compile_entries
+        from fretc.fretish import load_requirements
+
+        path = Path(tempfile.mkdtemp()) / "t.fret"
+        path.write_text(f"R: {text}\n")
+        (c,) = compile_entries(load_requirements([str(path)]))
+        _COMPILED[text] = (c, monitor_source(c, 0))
+    return _COMPILED[text]
+
+
+def pqmx_columns(rows, names):
+    """Columns of rows (p, q, m, x): booleans p, q, m and the number x; only ``names``."""
+    cols = {n: np.array([r[i] for r in rows], dtype=np.bool_) for i, n in enumerate("pqm")}
+    cols["x"] = np.array([r[3] for r in rows], dtype=np.float64)
+    return {n: c for n, c in cols.items() if n in names}

@@ -9,16 +9,13 @@ interval semantics over the filled trace) and the trials a probability bound cou
 from __future__ import annotations
 
 import itertools
-from pathlib import Path
 
 import numpy as np
 import pytest
 from hypothesis import given, settings, strategies as st
 
 from fretc.audit.trials import trigger_outcomes
-from fretc.compiler.build import compile_entries
-from fretc.compiler.codegen import monitor_source
-from fretc.fretish import load_requirements
+from _monitor_helpers import compiled_of, pqmx_columns
 from fretc.compiler import ir
 from fretc.monitors.completions import decide
 from fretc.monitors.definite import definite_evidence
@@ -46,25 +43,8 @@ SENTENCES = [
     "the sw shall always satisfy persisted(2, p) -> q",
     "when x > 1 the sw shall within 1 ticks satisfy x + 1 < 3",
 ]
-_compiled: dict = {}
 VALUES = {"p": (False, True), "q": (False, True), "m": (False, True), "x": (0.0, 1.0, 2.0)}
-
-
-def _compiled_of(text: str):
-    if text not in _compiled:
-        import tempfile
-
-        path = Path(tempfile.mkdtemp()) / "t.fret"
-        path.write_text(f"R: {text}\n")
-        (c,) = compile_entries(load_requirements([str(path)]))
-        _compiled[text] = (c, monitor_source(c, 0))
-    return _compiled[text]
-
-
-def _columns(rows, names):
-    cols = {n: np.array([r[i] for r in rows], dtype=np.bool_) for i, n in enumerate("pqm")}
-    cols["x"] = np.array([r[3] for r in rows], dtype=np.float64)
-    return {n: c for n, c in cols.items() if n in names}
+_compiled_of, _columns = compiled_of, pqmx_columns
 
 
 def _completions(cols, n, cells, gaps, counts=(1, 2, 3)):

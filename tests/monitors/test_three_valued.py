@@ -7,16 +7,13 @@ which a lost message would be newer than the one held."""
 from __future__ import annotations
 
 import itertools
-from pathlib import Path
 
 import pytest
 import numpy as np
 from hypothesis import given, settings, strategies as st
 
 from fretc.audit.gaps import unknown_masks
-from fretc.compiler.build import compile_entries
-from fretc.compiler.codegen import monitor_source
-from fretc.fretish import load_requirements
+from _monitor_helpers import compiled_of, pqmx_columns
 from fretc.logs.base import Gap
 from fretc.monitors.judge import ltl3_verdict as ltl3_two
 from fretc.monitors.completions import decide
@@ -37,24 +34,7 @@ SENTENCES = [
     "when x > 1 the sw shall within 1 ticks satisfy x + 1 < 3",
     "the sw shall always satisfy persisted(2, p) -> q",
 ]
-_compiled: dict = {}
-
-
-def _compiled_of(text: str):
-    if text not in _compiled:
-        import tempfile
-
-        path = Path(tempfile.mkdtemp()) / "t.fret"
-        path.write_text(f"R: {text}\n")
-        (c,) = compile_entries(load_requirements([str(path)]))
-        _compiled[text] = (c, monitor_source(c, 0))
-    return _compiled[text]
-
-
-def _columns(rows, names):
-    cols = {n: np.array([r[i] for r in rows], dtype=np.bool_) for i, n in enumerate("pqm")}
-    cols["x"] = np.array([r[3] for r in rows], dtype=np.float64)
-    return {n: c for n, c in cols.items() if n in names}
+_compiled_of, _columns = compiled_of, pqmx_columns
 
 
 _row = st.tuples(st.booleans(), st.booleans(), st.booleans(), st.sampled_from([0.0, 1.0, 2.0]))

@@ -29,3 +29,34 @@ def docs_shield(out: Path) -> Path:
               "linear_velocity", "--emit", "python", "-o", str(out))
     assert got.exit_code == 0, got.output
     return out
+
+
+def copy_mcap(src: Path, dst: Path, keep, *, library: str = "", metadata: dict | None = None) -> None:
+    """``src`` copied to ``dst`` by the mcap library, the messages ``keep(topic, log_time)``
+    refuses left out; ``library`` names the writer (profile ros2) and ``metadata`` is
+    ``{name: {key: value}}`` added before the summary."""
+    from mcap.reader import make_reader
+    from mcap.writer import Writer
+
+    with open(src, "rb") as f, open(dst, "wb") as g:
+        w = Writer(g)
+        if library:
+            w.start(profile="ros2", library=library)
+        else:
+            w.start()
+        schemas, channels = {}, {}
+        for schema, channel, m in make_reader(f).iter_messages(log_time_order=True):
+            if not keep(channel.topic, m.log_time):
+                continue
+            if schema.id not in schemas:
+                schemas[schema.id] = w.register_schema(schema.name, schema.encoding,
+                                                       schema.data)
+            if channel.id not in channels:
+                channels[channel.id] = w.register_channel(
+                    channel.topic, channel.message_encoding, schemas[schema.id],
+                    dict(channel.metadata))
+            w.add_message(channels[channel.id], m.log_time, m.data, m.publish_time,
+                          m.sequence)
+        for name, data in (metadata or {}).items():
+            w.add_metadata(name, data)
+        w.finish()

@@ -12,7 +12,7 @@ from pathlib import Path
 import pytest
 
 
-from _replay import REPO, TRACE, docs_shield, run
+from _replay import REPO, TRACE, copy_mcap, docs_shield, run
 
 
 
@@ -86,31 +86,6 @@ def test_a_link_planted_at_the_output_is_not_written_through(shield_dir, tmp_pat
     assert got.exit_code == 0, got.output
     assert victim.read_text() == "keep"
     assert not (out / "sif_disabled.shielded.mcap").is_symlink()
-
-
-def copy_mcap(src: Path, dst: Path, keep) -> None:
-    """``src`` copied to ``dst`` by the mcap library, the messages ``keep(topic, log_time)``
-    refuses left out."""
-    from mcap.reader import make_reader
-    from mcap.writer import Writer
-
-    with open(src, "rb") as f, open(dst, "wb") as g:
-        w = Writer(g)
-        w.start()
-        schemas, channels = {}, {}
-        for schema, channel, m in make_reader(f).iter_messages(log_time_order=True):
-            if not keep(channel.topic, m.log_time):
-                continue
-            if schema.id not in schemas:
-                schemas[schema.id] = w.register_schema(schema.name, schema.encoding,
-                                                       schema.data)
-            if channel.id not in channels:
-                channels[channel.id] = w.register_channel(
-                    channel.topic, channel.message_encoding, schemas[schema.id],
-                    dict(channel.metadata))
-            w.add_message(channels[channel.id], m.log_time, m.data, m.publish_time,
-                          m.sequence)
-        w.finish()
 
 
 def test_ticks_before_the_first_scan_are_decided_for_every_scan_and_say_so(shield_dir, tmp_path):

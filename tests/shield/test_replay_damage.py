@@ -18,7 +18,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 
-from _replay import REPO, TRACE, docs_shield, run
+from _replay import REPO, TRACE, copy_mcap, docs_shield, run
 
 REQS = ["-r", str(REPO / "requirements" / "safe_ros.fret"), "-r",
         str(REPO / "requirements" / "shield" / "release.fret")]
@@ -54,26 +54,7 @@ def by_topic(path: Path) -> dict[str, list]:
 
 def truncated_copy(src: Path, dst: Path, end: int) -> None:
     """``src`` copied by the mcap library with only the messages of log time < ``end``."""
-    from mcap.reader import make_reader
-    from mcap.writer import Writer
-
-    with open(src, "rb") as f, open(dst, "wb") as g:
-        w = Writer(g)
-        w.start()
-        schemas, channels = {}, {}
-        for schema, channel, m in make_reader(f).iter_messages(log_time_order=True):
-            if m.log_time >= end:
-                continue
-            if schema.id not in schemas:
-                schemas[schema.id] = w.register_schema(schema.name, schema.encoding,
-                                                       schema.data)
-            if channel.id not in channels:
-                channels[channel.id] = w.register_channel(
-                    channel.topic, channel.message_encoding, schemas[schema.id],
-                    dict(channel.metadata))
-            w.add_message(channels[channel.id], m.log_time, m.data, m.publish_time,
-                          m.sequence)
-        w.finish()
+    copy_mcap(src, dst, lambda _topic, t: t < end)
 
 
 def read_by_the_audit(path: Path) -> tuple[bool, bool]:
@@ -331,7 +312,6 @@ def test_a_watch_recording_s_gaps_are_carried_into_the_shielded_recording(shield
     messages; the shielded recording carries them on, so its audit is partial as the
     recording's is."""
     from mcap.reader import make_reader
-    from mcap.writer import Writer
 
     from fretc.logs.base import Gap
     from fretc.logs.recorded_gaps import GAPS_METADATA, WATCH_LIBRARY, gaps_json, parse_gaps
@@ -339,24 +319,9 @@ def test_a_watch_recording_s_gaps_are_carried_into_the_shielded_recording(shield
     lost = [Gap(1_700_000_005_000_000_000, 1_700_000_006_000_000_000, frozenset({"/scan"}),
                 "dropped")]
     watched = tmp_path / "watched.mcap"
-    with open(TRACE, "rb") as f, open(watched, "wb") as g:
-        w = Writer(g)
-        w.start(profile="ros2", library=WATCH_LIBRARY)
-        schemas, channels = {}, {}
-        for schema, channel, m in make_reader(f).iter_messages(log_time_order=True):
-            if channel.topic == "/scan" and lost[0].start <= m.log_time <= lost[0].end:
-                continue  # (what the watch lost)
-            if schema.id not in schemas:
-                schemas[schema.id] = w.register_schema(schema.name, schema.encoding,
-                                                       schema.data)
-            if channel.id not in channels:
-                channels[channel.id] = w.register_channel(
-                    channel.topic, channel.message_encoding, schemas[schema.id],
-                    dict(channel.metadata))
-            w.add_message(channels[channel.id], m.log_time, m.data, m.publish_time,
-                          m.sequence)
-        w.add_metadata(GAPS_METADATA, {"gaps": gaps_json(lost)})
-        w.finish()
+    copy_mcap(TRACE, watched,  # (what the watch lost left out)
+              lambda topic, t: not (topic == "/scan" and lost[0].start <= t <= lost[0].end),
+              library=WATCH_LIBRARY, metadata={GAPS_METADATA: {"gaps": gaps_json(lost)}})
     got = run("shield-replay", str(shield_dir), str(watched), "-o", str(tmp_path / "out"),
               *REQS, "--json", str(tmp_path / "r.json"))
     assert got.exit_code in (1, 3), got.output
