@@ -176,3 +176,20 @@ def audit_written(tmp_path: Path, name: str, fret: str, bindings: str, log: Any)
     (tmp_path / f"{name}.bindings.toml").write_text(bindings)
     return audit_log(load_plan(AuditConfig(requirements=(str(tmp_path / f"{name}.fret"),))),
                      str(log))
+
+
+def both_clocks(path: Path, bindings: Any) -> list:
+    """The ticks of the watch's clock over the log at ``path``, checked equal to the audit's
+    block sampler (NaN equal to NaN)."""
+    from fretc.logs import open_log
+    from fretc.signals.arrays import sample_arrays
+    from fretc.signals.clock import sample
+
+    src = open_log(path)
+    ticks = list(sample(src, bindings))
+    arr = sample_arrays(src, bindings)
+    assert arr.times.tolist() == [t.time for t in ticks]
+    for name in bindings.variables:
+        got, want = arr.columns[name].tolist(), [t.values[name] for t in ticks]
+        assert all((g != g and w != w) or g == w for g, w in zip(got, want)), (name, got, want)
+    return ticks

@@ -44,3 +44,13 @@ def params(make, arity: int = 1) -> list:
     if PRESENT:
         return list(make())
     return [pytest.param(*[None] * arity, marks=needs_shared, id="shared-absent")]
+
+
+def cli(*args) -> tuple[int, str]:
+    """``fretc *args`` run in process (exceptions raised): (exit code, output)."""
+    from click.testing import CliRunner
+
+    from fretc.cli import main
+
+    r = CliRunner().invoke(main, [str(a) for a in args], catch_exceptions=False)
+    return r.exit_code, r.output

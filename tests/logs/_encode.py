@@ -187,3 +187,19 @@ def _fill(msg, doc: dict) -> None:
             getattr(msg, f.name).extend(v)
         else:
             setattr(msg, f.name, v)
+
+
+def same_value(a, b) -> bool:
+    """Whether two decoded values are equal in type, dtype and value (NaN equal to NaN), down
+    through lists and SimpleNamespace messages."""
+    from types import SimpleNamespace
+
+    if isinstance(a, np.ndarray) or isinstance(b, np.ndarray):
+        return (type(a) is type(b) and a.dtype == b.dtype
+                and np.array_equal(a, b, equal_nan=a.dtype.kind == "f"))
+    if isinstance(a, SimpleNamespace):
+        return (isinstance(b, SimpleNamespace) and vars(a).keys() == vars(b).keys()
+                and all(same_value(vars(a)[k], vars(b)[k]) for k in vars(a)))
+    if isinstance(a, list):
+        return isinstance(b, list) and len(a) == len(b) and all(map(same_value, a, b))
+    return type(a) is type(b) and (a == b or a != a and b != b)

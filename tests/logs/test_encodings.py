@@ -17,7 +17,7 @@ from hypothesis import strategies as st
 pytest.importorskip("mcap_protobuf")
 pytest.importorskip("cbor2")
 
-from _encode import copy_as  # noqa: E402
+from _encode import copy_as, same_value  # noqa: E402
 from _shared import SHARED, needs_shared  # noqa: E402
 from fretc.audit import AuditConfig, audit_log, load_plan  # noqa: E402
 from fretc.logs import open_log  # noqa: E402
@@ -156,19 +156,7 @@ def _float(x):
     return float("inf") if x > 0 else float("-inf")
 
 
-def _same(a, b) -> bool:
-    import numpy as np
-    from types import SimpleNamespace
-
-    if isinstance(a, np.ndarray) or isinstance(b, np.ndarray):
-        return (type(a) is type(b) and a.dtype == b.dtype
-                and np.array_equal(a, b, equal_nan=a.dtype.kind == "f"))
-    if isinstance(a, SimpleNamespace):
-        return (isinstance(b, SimpleNamespace) and vars(a).keys() == vars(b).keys()
-                and all(_same(vars(a)[k], vars(b)[k]) for k in vars(a)))
-    if isinstance(a, list):
-        return isinstance(b, list) and len(a) == len(b) and all(map(_same, a, b))
-    return type(a) is type(b) and (a == b or a != a and b != b)
+_same = same_value
 
 
 def test_json_values_become_the_arrays_and_objects_of_the_rule():

@@ -11,12 +11,11 @@ import json
 from pathlib import Path
 from types import SimpleNamespace
 
-import numpy as np
 import pytest
 from hypothesis import given, settings, strategies as st
 from mcap.reader import make_reader
 
-from _encode import copy_as
+from _encode import copy_as, same_value
 from fretc.logs.decoding import schema_decoder
 from fretc.logs.field_select import field_tree
 from fretc.logs.ros.selective import HEADER_STAMP
@@ -35,16 +34,7 @@ def _at(msg, path):
     return msg
 
 
-def _same(a, b) -> bool:
-    if isinstance(a, np.ndarray) or isinstance(b, np.ndarray):
-        return (type(a) is type(b) and a.dtype == b.dtype
-                and np.array_equal(a, b, equal_nan=a.dtype.kind == "f"))
-    if isinstance(a, SimpleNamespace):
-        return (isinstance(b, SimpleNamespace) and vars(a).keys() == vars(b).keys()
-                and all(_same(vars(a)[k], vars(b)[k]) for k in vars(a)))
-    if isinstance(a, list):
-        return isinstance(b, list) and len(a) == len(b) and all(map(_same, a, b))
-    return type(a) is type(b) and (a == b or a != a and b != b)
+_same = same_value
 
 
 def _leaf_paths(msg, prefix=()):

@@ -14,6 +14,7 @@ from pathlib import Path
 import pytest
 from click.testing import CliRunner
 
+from _shared import cli
 from fretc.cli import main
 from fretc.fretish.files import load_requirements
 
@@ -26,9 +27,7 @@ pytestmark = pytest.mark.skipif(not (ROOT / "traces" / "nominal.mcap").exists(),
                                 reason="traces/ is absent")
 
 
-def _run(*args) -> tuple[int, str]:
-    r = CliRunner().invoke(main, [str(a) for a in args], catch_exceptions=False)
-    return r.exit_code, r.output
+_run = cli
 
 
 @pytest.fixture(scope="module")

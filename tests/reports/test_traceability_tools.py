@@ -16,9 +16,8 @@ import xml.etree.ElementTree as ET
 from pathlib import Path
 
 import pytest
-from click.testing import CliRunner
 
-from fretc.cli import main
+from _shared import cli
 
 ROOT = Path(__file__).resolve().parents[2]
 FIX = ROOT / "tests" / "fixtures" / "requirements_tools"
@@ -31,9 +30,7 @@ pytestmark = pytest.mark.skipif(not (ROOT / "traces" / "nominal.mcap").exists(),
                                 reason="traces/ is absent")
 
 
-def _run(*args) -> tuple[int, str]:
-    r = CliRunner().invoke(main, [str(a) for a in args], catch_exceptions=False)
-    return r.exit_code, r.output
+_run = cli
 
 
 @pytest.fixture(scope="module")

@@ -13,16 +13,14 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from _logs import MS, ROS2, T, header, write_mcap
+from _logs import MS, both_clocks, ROS2, T, header, write_mcap
 from fretc.common.problems import BindingError, SignalError
 from fretc.logs import open_log
-from fretc.signals.arrays import sample_arrays
 from fretc.signals.bindings.binding import compile_expression
 from fretc.signals.bindings.files import parse_bindings
 from fretc.signals.bindings.spec import TickSpec, make_bindings
 from fretc.signals.bindings.typecheck import check_types
 from fretc.logs.schema import log_schemas
-from fretc.signals.clock import sample
 from fretc.signals.streams import Streams
 
 
@@ -38,15 +36,7 @@ def _log(tmp_path_factory, msgs):
     return write_mcap(tmp_path_factory.mktemp("flt") / "f.mcap", rows, chunk_size=256)
 
 
-def _both_clocks(path, bindings):
-    src = open_log(path)
-    ticks = list(sample(src, bindings))
-    arr = sample_arrays(src, bindings)
-    assert arr.times.tolist() == [t.time for t in ticks]
-    for name in bindings.variables:
-        got, want = arr.columns[name].tolist(), [t.values[name] for t in ticks]
-        assert all((g != g and w != w) or g == w for g, w in zip(got, want)), (name, got, want)
-    return ticks
+_both_clocks = both_clocks
 
 
 MSGS = st.lists(st.tuples(st.integers(0, 2000), st.integers(0, 2),

@@ -14,7 +14,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from _logs import MS, float64, write_mcap
+from _logs import MS, both_clocks, float64, write_mcap
 from fretc.common.problems import BindingError
 from fretc.logs import open_log
 from fretc.signals.arrays import sample_arrays
@@ -42,16 +42,7 @@ def _log(tmp_path_factory, a, t_times):
                       sorted(msgs, key=lambda m: (m[2], m[0])), chunk_size=256)
 
 
-def _both_clocks(path, bindings):
-    """The ticks of the watch's clock, checked equal to the audit's block sampler."""
-    src = open_log(path)
-    ticks = list(sample(src, bindings))
-    arr = sample_arrays(src, bindings)
-    assert arr.times.tolist() == [t.time for t in ticks]
-    for name in bindings.variables:
-        got, want = arr.columns[name].tolist(), [t.values[name] for t in ticks]
-        assert all((g != g and w != w) or g == w for g, w in zip(got, want)), (name, got, want)
-    return ticks
+_both_clocks = both_clocks
 
 
 def _reference(a, times, span_ms, frame_fn, **kw):
