@@ -203,3 +203,25 @@ def same_value(a, b) -> bool:
     if isinstance(a, list):
         return isinstance(b, list) and len(a) == len(b) and all(map(same_value, a, b))
     return type(a) is type(b) and (a == b or a != a and b != b)
+
+
+def json_strategies(*extra_scalars) -> tuple:
+    """Hypothesis strategies (values, schemas): JSON values of small scalars (and
+    ``extra_scalars``) in lists and objects of keys a, b, c, and JSON schemas of any types
+    over arrays and objects of those keys."""
+    from hypothesis import strategies as st
+
+    types = ["number", "integer", "boolean", "string", "object", "array", "null"]
+    scalars = st.one_of(st.integers(-5, 5), st.floats(allow_nan=False, width=32), st.booleans(),
+                        st.text(max_size=3), st.none(), st.sampled_from([1.0, 2.5, *extra_scalars]))
+    values = st.recursive(scalars, lambda c: st.one_of(
+        st.lists(c, max_size=4), st.dictionaries(st.sampled_from(["a", "b", "c"]), c, max_size=3)),
+        max_leaves=12)
+    schemas = st.recursive(
+        st.fixed_dictionaries({}, optional={"type": st.one_of(st.sampled_from(types), st.lists(
+            st.sampled_from(types), max_size=2))}),
+        lambda c: st.one_of(
+            st.fixed_dictionaries({"type": st.just("array"), "items": c}),
+            st.fixed_dictionaries({"type": st.just("object"), "properties": st.dictionaries(
+                st.sampled_from(["a", "b", "c"]), c, max_size=3)})), max_leaves=8)
+    return values, schemas

@@ -12,12 +12,11 @@ from pathlib import Path
 
 import pytest
 from hypothesis import given, settings
-from hypothesis import strategies as st
 
 pytest.importorskip("mcap_protobuf")
 pytest.importorskip("cbor2")
 
-from _encode import copy_as, same_value  # noqa: E402
+from _encode import copy_as, json_strategies, same_value  # noqa: E402
 from _shared import SHARED, needs_shared  # noqa: E402
 from fretc.audit import AuditConfig, audit_log, load_plan  # noqa: E402
 from fretc.logs import open_log  # noqa: E402
@@ -251,19 +250,7 @@ def _reference_check(value, spec, where="", depth=0):
             _reference_check(item, spec["items"], f"{where}[{i}]", depth + 1)
 
 
-_TYPES = ["number", "integer", "boolean", "string", "object", "array", "null"]
-_scalars = st.one_of(st.integers(-5, 5), st.floats(allow_nan=False, width=32), st.booleans(),
-                     st.text(max_size=3), st.none(), st.sampled_from([1.0, 2.5]))
-_values = st.recursive(_scalars, lambda c: st.one_of(
-    st.lists(c, max_size=4), st.dictionaries(st.sampled_from(["a", "b", "c"]), c, max_size=3)),
-    max_leaves=12)
-_schemas = st.recursive(
-    st.fixed_dictionaries({}, optional={"type": st.one_of(st.sampled_from(_TYPES), st.lists(
-        st.sampled_from(_TYPES), max_size=2))}),
-    lambda c: st.one_of(
-        st.fixed_dictionaries({"type": st.just("array"), "items": c}),
-        st.fixed_dictionaries({"type": st.just("object"), "properties": st.dictionaries(
-            st.sampled_from(["a", "b", "c"]), c, max_size=3)})), max_leaves=8)
+_values, _schemas = json_strategies()
 
 
 @settings(max_examples=300, deadline=None)

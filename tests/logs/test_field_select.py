@@ -15,7 +15,7 @@ import pytest
 from hypothesis import given, settings, strategies as st
 from mcap.reader import make_reader
 
-from _encode import copy_as, same_value
+from _encode import copy_as, json_strategies, same_value
 from fretc.logs.decoding import schema_decoder
 from fretc.logs.field_select import field_tree
 from fretc.logs.ros.selective import HEADER_STAMP
@@ -98,19 +98,7 @@ def _restricted(value, tree):
     return {k: _restricted(value[k], sub) for k, sub in tree.items() if k in value}
 
 
-_TYPES = ["number", "integer", "boolean", "string", "object", "array", "null"]
-_scalars = st.one_of(st.integers(-5, 5), st.floats(allow_nan=False, width=32), st.booleans(),
-                     st.text(max_size=3), st.none(), st.sampled_from([1.0, 2.5, 2**70]))
-_values = st.recursive(_scalars, lambda c: st.one_of(
-    st.lists(c, max_size=4), st.dictionaries(st.sampled_from(["a", "b", "c"]), c, max_size=3)),
-    max_leaves=12)
-_schemas = st.recursive(
-    st.fixed_dictionaries({}, optional={"type": st.one_of(st.sampled_from(_TYPES), st.lists(
-        st.sampled_from(_TYPES), max_size=2))}),
-    lambda c: st.one_of(
-        st.fixed_dictionaries({"type": st.just("array"), "items": c}),
-        st.fixed_dictionaries({"type": st.just("object"), "properties": st.dictionaries(
-            st.sampled_from(["a", "b", "c"]), c, max_size=3)})), max_leaves=8)
+_values, _schemas = json_strategies(2**70)
 _paths = st.frozensets(st.lists(st.sampled_from(["a", "b", "c"]), min_size=1, max_size=3)
                        .map(tuple), min_size=1, max_size=3)
 

@@ -14,20 +14,9 @@ from pathlib import Path
 import pytest
 from click.testing import CliRunner
 
-from _shared import cli
 from fretc.cli import main
 from fretc.fretish.files import load_requirements
-
-ROOT = Path(__file__).resolve().parents[2]
-FIX = ROOT / "tests" / "fixtures" / "requirements_tools"
-REQIF = FIX / "strictdoc" / "safe_ros.reqif"
-DOORSTOP = FIX / "doorstop"
-BINDINGS = ROOT / "requirements" / "safe_ros.bindings.toml"
-pytestmark = pytest.mark.skipif(not (ROOT / "traces" / "nominal.mcap").exists(),
-                                reason="traces/ is absent")
-
-
-_run = cli
+from test_traceability_tools import BINDINGS, DOORSTOP, REQIF, ROOT, _run, pytestmark  # noqa: F401
 
 
 @pytest.fixture(scope="module")

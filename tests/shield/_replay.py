@@ -60,3 +60,20 @@ def copy_mcap(src: Path, dst: Path, keep, *, library: str = "", metadata: dict |
         for name, data in (metadata or {}).items():
             w.add_metadata(name, data)
         w.finish()
+
+
+def rosbag2_copy(src: Path, bag: Path, **writer_options) -> None:
+    """The messages of the MCAP ``src`` written as the rosbag2 folder ``bag`` (ROS 2 Jazzy's
+    types; ``writer_options`` to rosbags' Writer, e.g. ``storage_plugin``)."""
+    from mcap.reader import make_reader
+    from rosbags.rosbag2 import Writer
+    from rosbags.typesys import Stores, get_typestore
+
+    store = get_typestore(Stores.ROS2_JAZZY)
+    with Writer(bag, version=9, **writer_options) as w, open(src, "rb") as f:
+        conns = {}
+        for schema, channel, m in make_reader(f).iter_messages(log_time_order=True):
+            if channel.topic not in conns:
+                conns[channel.topic] = w.add_connection(channel.topic, schema.name,
+                                                        typestore=store)
+            w.write(conns[channel.topic], m.log_time, m.data)

@@ -12,7 +12,7 @@ from pathlib import Path
 import pytest
 
 
-from _replay import REPO, TRACE, copy_mcap, docs_shield, run
+from _replay import REPO, TRACE, copy_mcap, docs_shield, rosbag2_copy, run
 
 
 
@@ -127,19 +127,8 @@ def test_ticks_before_the_first_scan_are_decided_for_every_scan_and_say_so(shiel
 
 
 def test_a_rosbag2_folder_is_replayed_with_its_messages_kept(shield_dir, tmp_path):
-    from mcap.reader import make_reader
-    from rosbags.rosbag2 import Writer
-    from rosbags.typesys import Stores, get_typestore
-
-    store = get_typestore(Stores.ROS2_JAZZY)
     bag = tmp_path / "run_bag"
-    with Writer(bag, version=9) as w, open(TRACE, "rb") as f:
-        conns = {}
-        for schema, channel, m in make_reader(f).iter_messages(log_time_order=True):
-            if channel.topic not in conns:
-                conns[channel.topic] = w.add_connection(channel.topic, schema.name,
-                                                        typestore=store)
-            w.write(conns[channel.topic], m.log_time, m.data)
+    rosbag2_copy(TRACE, bag)
     got = run("shield-replay", str(shield_dir), str(bag), "-o", str(tmp_path / "out"), "-r",
               str(REPO / "requirements" / "shield" / "release.fret"))
     assert got.exit_code in (0, 1), got.output

@@ -18,7 +18,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 
-from _replay import REPO, TRACE, copy_mcap, docs_shield, run
+from _replay import REPO, TRACE, copy_mcap, docs_shield, rosbag2_copy, run
 
 REQS = ["-r", str(REPO / "requirements" / "safe_ros.fret"), "-r",
         str(REPO / "requirements" / "shield" / "release.fret")]
@@ -211,20 +211,10 @@ def test_a_rosbag2_folder_whose_storage_is_cut_is_refused_as_the_audit_refuses_i
     """rosbags opens no cut rosbag2 storage (sqlite3: "database disk image is malformed";
     MCAP: no end magic), so neither the audit nor the replay reads anything of it: exit 2,
     the folder and the reader's words named, nothing written."""
-    from mcap.reader import make_reader
-    from rosbags.rosbag2 import StoragePlugin, Writer
-    from rosbags.typesys import Stores, get_typestore
+    from rosbags.rosbag2 import StoragePlugin
 
-    store = get_typestore(Stores.ROS2_JAZZY)
     bag = tmp_path / "run_bag"
-    with Writer(bag, version=9, storage_plugin=getattr(StoragePlugin, plugin)) as w, \
-            open(TRACE, "rb") as f:
-        conns = {}
-        for schema, channel, m in make_reader(f).iter_messages(log_time_order=True):
-            if channel.topic not in conns:
-                conns[channel.topic] = w.add_connection(channel.topic, schema.name,
-                                                        typestore=store)
-            w.write(conns[channel.topic], m.log_time, m.data)
+    rosbag2_copy(TRACE, bag, storage_plugin=getattr(StoragePlugin, plugin))
     storage = next(p for p in bag.iterdir() if p.suffix in (".db3", ".mcap"))
     storage.write_bytes(storage.read_bytes()[: storage.stat().st_size // 2])
     bindings = str(next(shield_dir.glob("*.bindings.toml")))
