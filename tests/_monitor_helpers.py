@@ -126,3 +126,17 @@ def pqmx_columns(rows, names):
     cols = {n: np.array([r[i] for r in rows], dtype=np.bool_) for i, n in enumerate("pqm")}
     cols["x"] = np.array([r[3] for r in rows], dtype=np.float64)
     return {n: c for n, c in cols.items() if n in names}
+
+
+def autopilot_export(defined: bool, inputs, requirements, psi: str, roll: str) -> dict:
+    """An LMCPS-like FRET export of component Autopilot: ``inputs`` [(name, type)],
+    ``requirements`` [(id, text)], and the stream variables psiAtZero (``psi``) and rollAtZero
+    (``roll``) defined (``defined``), else Inputs."""
+    variables = [{"component_name": "Autopilot", "variable_name": n, "idType": "Input",
+                  "dataType": t} for n, t in inputs]
+    for name, text in (("psiAtZero", psi), ("rollAtZero", roll)):
+        variables.append({"component_name": "Autopilot", "variable_name": name,
+                          "idType": "Internal" if defined else "Input", "dataType": "double",
+                          "assignment": text if defined else ""})
+    return {"requirements": [{"reqid": i, "fulltext": t} for i, t in requirements],
+            "variables": variables}

@@ -17,6 +17,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import fretc.audit.streamed as streamed
+from _monitor_helpers import autopilot_export
 from fretc.cli import main
 
 PSI = "Psi -> if (hdg and not pre hdg) then Psi else pre psiAtZero"
@@ -53,14 +54,7 @@ def reference(rows: list[dict]) -> list[tuple[float, float]]:
 
 def export(defined: bool) -> dict:
     """An LMCPS-like export: the two stream variables defined (``defined``), else Inputs."""
-    variables = [{"component_name": "Autopilot", "variable_name": n, "idType": "Input",
-                  "dataType": t} for n, t in INPUTS]
-    for name, text in (("psiAtZero", PSI), ("rollAtZero", ROLL)):
-        variables.append({"component_name": "Autopilot", "variable_name": name,
-                          "idType": "Internal" if defined else "Input", "dataType": "double",
-                          "assignment": text if defined else ""})
-    return {"requirements": [{"reqid": i, "fulltext": t} for i, t in REQUIREMENTS],
-            "variables": variables}
+    return autopilot_export(defined, INPUTS, REQUIREMENTS, PSI, ROLL)
 
 
 def _cell(x, unknown: bool = False) -> str:

@@ -16,6 +16,7 @@ from click.testing import CliRunner
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from _monitor_helpers import autopilot_export
 from fretc.cli import main
 
 LMCPS = Path(__file__).resolve().parents[3] / "shared/corpora/fret_projects/LMCPS/" \
@@ -50,14 +51,7 @@ def reference(rows: list[dict]) -> list[dict]:
 
 
 def _export(defined: bool) -> dict:
-    variables = [{"component_name": "Autopilot", "variable_name": n, "idType": "Input",
-                  "dataType": t} for n, t in INPUTS]
-    for name, text in (("psiAtZero", PSI), ("rollAtZero", ROLL)):
-        variables.append({"component_name": "Autopilot", "variable_name": name,
-                          "idType": "Internal" if defined else "Input", "dataType": "double",
-                          "assignment": text if defined else ""})
-    return {"requirements": [{"reqid": i, "fulltext": t} for i, t in REQUIREMENTS],
-            "variables": variables}
+    return autopilot_export(defined, INPUTS, REQUIREMENTS, PSI, ROLL)
 
 
 def _module(tmp: Path, doc: dict) -> dict:

@@ -153,3 +153,15 @@ def fret_export(tmp_path: Path, texts: list[str], variables: list[dict]) -> Path
         {"reqid": f"R{k + 1}", "project": "P", "fulltext": t} for k, t in enumerate(texts)],
         "variables": variables}), encoding="utf-8")
     return path
+
+
+@st.composite
+def unscoped_sets(draw, conditions: list[str], timings: list[str], responses: list[str]) -> str:
+    """The text of a .fret file of 1 .. 3 requirements of no scope, from the given
+    conditions, timings and responses."""
+    lines = []
+    for k in range(draw(st.integers(1, 3))):
+        lines.append(f"R{k + 1}: {draw(st.sampled_from(conditions))}sw shall "
+                     f"{draw(st.sampled_from(timings))}satisfy "
+                     f"{draw(st.sampled_from(responses))}")
+    return "\n".join(lines) + "\n"

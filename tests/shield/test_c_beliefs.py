@@ -31,7 +31,7 @@ from fretc.shield.plan import ShieldError
 from fretc.shield.runtime import BELIEF_LIMIT, ShieldRuntime
 
 from _c_monitors import build, needs_cc, write
-from _gen import compile_text, csv_cell, fault_kind
+from _gen import compile_text, csv_cell, fault_kind, unscoped_sets
 
 INPUTS = ["a", "d", "e"]
 OUTPUTS = ["x", "y", "v"]
@@ -44,12 +44,7 @@ TIMINGS = ["immediately ", "at the next timepoint ", "within 2 ticks ", "within 
 
 @st.composite
 def requirement_sets(draw) -> str:
-    lines = []
-    for k in range(draw(st.integers(1, 3))):
-        lines.append(f"R{k + 1}: {draw(st.sampled_from(CONDITIONS))}sw shall "
-                     f"{draw(st.sampled_from(TIMINGS))}satisfy "
-                     f"{draw(st.sampled_from(RESPONSES))}")
-    return "\n".join(lines) + "\n"
+    return draw(unscoped_sets(CONDITIONS, TIMINGS, RESPONSES))
 
 
 NUMBERS = [-1.0, 0.0, 0.5, 1.0, 2.0, 3.0, math.inf]

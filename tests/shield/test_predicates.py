@@ -32,7 +32,7 @@ from fretc.shield.prove import prove_shield
 from fretc.shield.runtime import ShieldRuntime, term_value
 
 from _c_monitors import build, needs_cc, write
-from _gen import atoms_of, compile_text, safe, verdicts
+from _gen import atoms_of, compile_text, safe, verdicts, unscoped_sets
 
 INPUTS = ["a", "b"]
 OUTPUTS = ["x", "p", "q", "r"]
@@ -49,12 +49,7 @@ SETTINGS = settings(max_examples=30, deadline=None,
 @st.composite
 def sets(draw) -> str:
     """1 .. 3 requirements over comparisons of several variables (module docstring)."""
-    lines = []
-    for k in range(draw(st.integers(1, 3))):
-        lines.append(f"R{k + 1}: {draw(st.sampled_from(CONDITIONS))}sw shall "
-                     f"{draw(st.sampled_from(TIMINGS))}satisfy "
-                     f"{draw(st.sampled_from(RESPONSES))}")
-    return "\n".join(lines) + "\n"
+    return draw(unscoped_sets(CONDITIONS, TIMINGS, RESPONSES))
 
 
 @st.composite
