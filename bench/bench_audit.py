@@ -63,7 +63,7 @@ B9: after too_close the safety_system shall eventually satisfy stop_requested
 B10: the scout_mini shall always satisfy min_range > 0.05
 """
 
-# same layout as SYN_BINDINGS in tests/reports/test_report.py (kept: a bindings file is data; the
+# same layout as SYN_BINDINGS in tests/_logs.py (kept: a bindings file is data; the
 # bench binds the robot's topics)
 BINDINGS = """[tick]
 period = "100 ms"

@@ -193,3 +193,14 @@ def both_clocks(path: Path, bindings: Any) -> list:
         got, want = arr.columns[name].tolist(), [t.values[name] for t in ticks]
         assert all((g != g and w != w) or g == w for g, w in zip(got, want)), (name, got, want)
     return ticks
+
+
+#: the bindings of the synthetic run (/scan, /cmd, /flag) that the audit and report tests share
+SYN_BINDINGS = """[tick]
+period = "100 ms"
+[variables]
+near = "min(/scan.ranges) < 0.5"
+halted = "abs(/cmd.linear.x) < 1e-3"
+speed = "abs(/cmd.linear.x)"
+flag = "/flag.data"
+"""

@@ -140,3 +140,14 @@ def autopilot_export(defined: bool, inputs, requirements, psi: str, roll: str) -
                           "assignment": text if defined else ""})
     return {"requirements": [{"reqid": i, "fulltext": t} for i, t in requirements],
             "variables": variables}
+
+
+def keyed_monitors(responses: list[str], conditions: list[str]) -> list:
+    """Per template key (:data:`KEYS`): (pt formula, monitor source), the response, condition
+    and duration varied with the key's index."""
+    out = []
+    for i, (s, c, t) in enumerate(KEYS):
+        comp = compiled(requirement(s, c, t, response=responses[i % 6],
+                                    condition=conditions[i % 3], n=i % 4), rid=f"K{i}")
+        out.append((comp.formalization.pt, monitor_source(comp, i)))
+    return out

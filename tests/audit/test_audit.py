@@ -16,7 +16,7 @@ import pytest
 from fretc.audit import AuditConfig, audit_log, audit_logs, find_logs, load_plan
 from fretc.audit.verdict import audit_json
 
-from _logs import MS, S, boolean, scan, twist, write_mcap
+from _logs import MS, S, SYN_BINDINGS, boolean, scan, twist, write_mcap
 from _shared import SHARED, needs_shared
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -285,16 +285,6 @@ SYN_FRET = """@tick_period 100 ms
 A1: whenever near the bot shall within 500 milliseconds satisfy halted
 A2: the bot shall always satisfy speed <= 1
 A3: whenever flag the bot shall immediately satisfy halted
-"""
-# the first lines of SYN_BINDINGS in tests/reports/test_report.py (kept: data; each test file
-# binds its own variables)
-SYN_BINDINGS = """[tick]
-period = "100 ms"
-[variables]
-near = "min(/scan.ranges) < 0.5"
-halted = "abs(/cmd.linear.x) < 1e-3"
-speed = "abs(/cmd.linear.x)"
-flag = "/flag.data"
 """
 
 

@@ -49,3 +49,15 @@ def write_dataflash(path: Path, rows: list[tuple[str, list]]) -> Path:
         out += _record(fmts[name], vals)
     path.write_bytes(bytes(out))
     return path
+
+
+def two_batteries(path: Path) -> Path:
+    """A DataFlash log of BAT instance 0 every 100 ms from 1 s to 5.9 s and instance 1 from
+    1 s to 2.9 s only (volts 12 and 11)."""
+    rows = []
+    for i in range(50):
+        t = 1_000_000 + i * 100_000
+        rows.append(("BAT", [t, 0, 12.0, 5.0, 90.0]))
+        if i < 20:
+            rows.append(("BAT", [t + 10, 1, 11.0, 1.0, 50.0]))
+    return write_dataflash(path, rows)

@@ -16,7 +16,7 @@ pytest.importorskip("pyulog")
 pytest.importorskip("pymavlink")
 
 sys.path.insert(0, str(Path(__file__).parent))
-from _dataflash import write_dataflash  # noqa: E402
+from _dataflash import two_batteries  # noqa: E402
 from _ulog import write_ulog  # noqa: E402
 from fretc.audit import AuditConfig, audit_log, load_plan  # noqa: E402
 from fretc.logs import open_log  # noqa: E402
@@ -91,13 +91,7 @@ def test_a_px4_gps_that_dies_less_than_its_limit_before_the_end_is_not_stale(tmp
 def test_an_ardupilot_battery_instance_that_stops_early_is_stale(tmp_path):
     """DataFlash: BAT instance 1 stops at 2.9 s, instance 0 goes on to 5.9 s; the log's end
     is the scan's latest TimeUS, and ``age("BAT/1")`` is stale from 3.5 s on."""
-    rows = []
-    for i in range(50):
-        t = 1_000_000 + i * 100_000
-        rows.append(("BAT", [t, 0, 12.0, 5.0, 90.0]))
-        if i < 20:
-            rows.append(("BAT", [t + 10, 1, 11.0, 1.0, 50.0]))
-    log = write_dataflash(tmp_path / "flight.bin", rows)
+    log = two_batteries(tmp_path / "flight.bin")
     assert open_log(log).log_end == 5_900_000 * 1000
     la = audit_log(_plan(tmp_path, 'age("BAT/1") > 0.5'), str(log))
     v = la.verdicts[0]

@@ -16,7 +16,7 @@ pytest.importorskip("pymavlink")
 
 sys.path.insert(0, str(Path(__file__).parent))
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-from _dataflash import write_dataflash  # noqa: E402
+from _dataflash import two_batteries  # noqa: E402
 from _shared import SHARED, skip_without_shared  # noqa: E402
 from _ulog import write_ulog  # noqa: E402
 from fretc.audit import AuditConfig, audit_log, load_plan  # noqa: E402
@@ -60,13 +60,7 @@ def test_a_px4_audit_reading_a_topic_that_stops_early_ends_at_the_log_end(tmp_pa
 
 def test_an_ardupilot_audit_reading_an_instance_that_stops_early_ends_at_the_log_end(
         tmp_path):
-    rows = []
-    for i in range(50):
-        t = 1_000_000 + i * 100_000
-        rows.append(("BAT", [t, 0, 12.0, 5.0, 90.0]))
-        if i < 20:
-            rows.append(("BAT", [t + 10, 1, 11.0, 1.0, 50.0]))
-    log = write_dataflash(tmp_path / "flight.bin", rows)
+    log = two_batteries(tmp_path / "flight.bin")
     la = audit_log(_plan(tmp_path, "volt", '"BAT/1".Volt', "volt > 10"), str(log))
     assert la.verdicts[0].error is None and la.verdicts[0].verdict == "satisfied"
     assert la.end_time_ns == open_log(log).log_end == 5_900_000 * 1000

@@ -29,7 +29,7 @@ from fretc.monitors.robustness import (RobustnessStream, _MarginRuns, chunkable,
                                        past_truth, robustness, robustness_series)
 from fretc.monitors.vectorized import VectorizeError, node_series, supports
 
-from _monitor_helpers import KEYS, compiled, entry, requirement
+from _monitor_helpers import KEYS, entry, keyed_monitors
 from differential import random_requirement
 
 RESPONSES = ["r", "!r", "r | s", "r & c", "r xor m", "x > 2"]
@@ -42,12 +42,7 @@ X_VALUES = [0.0, 1.0, 2.0, 2.0, 3.0, 4.0, -0.0, 2.5, math.nan]
 def all_keys():
     """Per template key: the pt formula and the monitor source (varied response,
     condition, duration)."""
-    out = []
-    for i, (s, c, t) in enumerate(KEYS):
-        comp = compiled(requirement(s, c, t, response=RESPONSES[i % 6],
-                                    condition=CONDITIONS[i % 3], n=i % 4), rid=f"K{i}")
-        out.append((comp.formalization.pt, monitor_source(comp, i)))
-    return out
+    return keyed_monitors(RESPONSES, CONDITIONS)
 
 
 def _bits(x: float) -> bytes:

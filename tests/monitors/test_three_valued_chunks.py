@@ -26,7 +26,7 @@ from fretc.monitors.three_valued import (KleeneStream, Ltl3SetStream, kleene_uns
                                          kleene_values, ltl3_verdict)
 from fretc.monitors.vectorized import VectorizeError
 
-from _monitor_helpers import KEYS, compiled, entry, requirement
+from _monitor_helpers import KEYS, compiled, entry, keyed_monitors, requirement
 from differential import random_requirement
 from test_streams import _PAST, CONDITIONS, RESPONSES
 
@@ -37,12 +37,7 @@ _SEEDS = st.integers(0, 2**32 - 1).map(random.Random)
 
 @pytest.fixture(scope="module")
 def all_keys():
-    out = []
-    for i, (s, c, t) in enumerate(KEYS):
-        comp = compiled(requirement(s, c, t, response=RESPONSES[i % 6],
-                                    condition=CONDITIONS[i % 3], n=i % 4), rid=f"K{i}")
-        out.append((comp.formalization.pt, monitor_source(comp, i)))
-    return out
+    return keyed_monitors(RESPONSES, CONDITIONS)
 
 
 def _trace(rnd: random.Random, n: int, names=BOOLS, numbers=("x",)):

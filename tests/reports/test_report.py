@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import dataclasses
 import hashlib
-import importlib.util
 import json
 import re
 import xml.etree.ElementTree as ET
@@ -25,7 +24,8 @@ from fretc.cli import main
 from fretc.audit.annotate import FOXGLOVE_LOG_SCHEMA, VERDICT_TOPIC, verdict_events
 from fretc.reports.context import GENERATED_PREFIX
 
-from _logs import MS, boolean, float64, scan, twist, write_mcap
+from test_report_pictures import _bench
+from _logs import MS, SYN_BINDINGS as _SYN_BINDINGS, boolean, float64, scan, twist, write_mcap
 
 ROOT = Path(__file__).resolve().parents[2]
 TRACES = ROOT / "traces"
@@ -397,18 +397,9 @@ S1: in moving mode, upon near the bot shall within 300 milliseconds satisfy halt
 S3: whenever flag the bot shall immediately satisfy halted
 S4: the bot shall always satisfy battery > 0.2
 """
-# same layout as BINDINGS in bench/bench_audit.py and SYN_BINDINGS in tests/audit/test_audit.py
-# (kept: data; this one binds more variables)
-SYN_BINDINGS = """[tick]
-period = "100 ms"
-[variables]
-near = "min(/scan.ranges) < 0.5"
-halted = "abs(/cmd.linear.x) < 1e-3"
-speed = "abs(/cmd.linear.x)"
-flag = "/flag.data"
-moving = "/mode.data"
-battery = "/battery.data"
-"""
+# the audit tests' bindings (tests/_logs.py; same layout as BINDINGS in bench/bench_audit.py)
+# and two more variables
+SYN_BINDINGS = _SYN_BINDINGS + 'moving = "/mode.data"\nbattery = "/battery.data"\n'
 
 
 def _synthetic_run(folder: Path) -> Path:
@@ -540,14 +531,6 @@ def test_bad_input_exits_2(tmp_path):
 
 
 # --------------------------------------------------------------------------- Chromium
-def _bench():
-    spec = importlib.util.spec_from_file_location("screenshot_report",
-                                                  ROOT / "bench" / "screenshot_report.py")
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return mod
-
-
 def test_report_opens_in_headless_chromium(shipped, tmp_path):
     bench = _bench()
     if bench.chromium() is None:
