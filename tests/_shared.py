@@ -54,3 +54,9 @@ def cli(*args) -> tuple[int, str]:
 
     r = CliRunner().invoke(main, [str(a) for a in args], catch_exceptions=False)
     return r.exit_code, r.output
+
+
+#: why a test of a live ROS 2 graph is skipped: rclpy (or cyclonedds) is not installed
+RCLPY_MISSING = ("ROS 2 Jazzy's rclpy is not installed here (the ros-jazzy-* wheels of the "
+                 "test extra are for CPython 3.11 on Linux x86_64)")
+CYCLONEDDS_MISSING = "cyclonedds is not installed: pip install 'fretc[watch]'"

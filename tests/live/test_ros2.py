@@ -30,12 +30,10 @@ from pathlib import Path
 import pytest
 
 from _ros2 import PEERS, REQ34, ROOT, fretc_run, kill_peers, peer, ros2_domain, started
+from _shared import CYCLONEDDS_MISSING, RCLPY_MISSING
 
-pytest.importorskip("rclpy", reason="ROS 2 Jazzy's rclpy is not installed here (the "
-                    "ros-jazzy-* wheels of the test extra are for CPython 3.11 on Linux "
-                    "x86_64)")
-pytest.importorskip("cyclonedds", reason="cyclonedds is not installed: pip install "
-                    "'fretc[watch]'")
+pytest.importorskip("rclpy", reason=RCLPY_MISSING)
+pytest.importorskip("cyclonedds", reason=CYCLONEDDS_MISSING)
 
 pytestmark = [pytest.mark.watch, pytest.mark.xdist_group("ros2")]
 

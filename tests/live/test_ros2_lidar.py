@@ -45,10 +45,9 @@ from pathlib import Path
 import pytest
 
 from _ros2 import ROOT, fretc_run, kill_peers, ros2_domain, started
+from _shared import RCLPY_MISSING
 
-pytest.importorskip("rclpy", reason="ROS 2 Jazzy's rclpy is not installed here (the "
-                    "ros-jazzy-* wheels of the test extra are for CPython 3.11 on Linux "
-                    "x86_64)")
+pytest.importorskip("rclpy", reason=RCLPY_MISSING)
 
 pytestmark = [pytest.mark.watch, pytest.mark.xdist_group("ros2")]
 

@@ -13,12 +13,10 @@ import time
 import pytest
 
 from _ros2 import REQ34, ROOT, fretc_run, fretc_start, kill_peers, peer, ros2_domain
+from _shared import CYCLONEDDS_MISSING, RCLPY_MISSING
 
-pytest.importorskip("rclpy", reason="ROS 2 Jazzy's rclpy is not installed here (the "
-                    "ros-jazzy-* wheels of the test extra are for CPython 3.11 on Linux "
-                    "x86_64)")
-pytest.importorskip("cyclonedds", reason="cyclonedds is not installed: pip install "
-                    "'fretc[watch]'")
+pytest.importorskip("rclpy", reason=RCLPY_MISSING)
+pytest.importorskip("cyclonedds", reason=CYCLONEDDS_MISSING)
 
 pytestmark = [pytest.mark.watch, pytest.mark.xdist_group("ros2")]
 

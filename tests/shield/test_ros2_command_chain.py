@@ -37,10 +37,9 @@ import pytest
 from click.testing import CliRunner
 
 from fretc.cli import main
+from _shared import RCLPY_MISSING
 
-pytest.importorskip("rclpy", reason="ROS 2 Jazzy's rclpy is not installed here (the "
-                    "ros-jazzy-* wheels of the test extra are for CPython 3.11 on Linux "
-                    "x86_64)")
+pytest.importorskip("rclpy", reason=RCLPY_MISSING)
 
 pytestmark = pytest.mark.xdist_group("ros2")
 
