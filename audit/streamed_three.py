@@ -3,42 +3,12 @@ three-valued semantics while they are read: the verdict, LTL3 verdict and eviden
 :func:`fretc.audit.unknown_ticks.judge_three` gives over the whole trace's columns, in memory
 that does not grow with the trace.
 
-A requirement judged as a CSV trace is read (:mod:`fretc.audit.streamed`) gives up at the
-first chunk where one of its comparisons reads NaN, and one reading a column with an
-``unknown`` cell, or any on a trace with a ``gap`` row (every column unknown there, one tick
-or more, how many not known), is given up at the end: those ticks are unknown (fretc's NaN
-rule, docs/guide/ticks.md), and its verdict is what every way of filling them, and every
-count of a gap's ticks, agrees on. The audit then reads the trace again, within the bytes
-the first read read (:attr:`fretc.logs.CsvSource.extent`), feeding each such requirement the
-three-valued judge's own objects a chunk of rows at a time (the gap rows as gap ticks):
-
-* Kleene's reading of the pt formula at the last tick
-  (:class:`fretc.monitors.three_valued.KleeneStream`);
-* the LTL3 verdict over every letter an unknown tick may be
-  (:class:`fretc.monitors.three_valued.Ltl3SetStream`);
-* the evidence of the definite failed triggers
-  (:class:`fretc.monitors.definite.DefiniteStream`);
-* the NaN ticks (how many, the first and the last: the ``nan`` data problem) and the ticks
-  it reads unknown (the NaN ticks and the ``unknown`` cells, whose rows the first read
-  listed: the verdict's unknown ticks and the reason of an unknown verdict);
-* every completion of the unknown ticks, for where Kleene's reading is open at the last tick
-  (:class:`fretc.monitors.completions.CompletionsStream`, with its bounds and their reason):
-  followed in the same read from the first to the last tick the first read found unknown
-  (the NaN ticks it saw, the ``unknown`` cells' rows), and kept when those are the ticks
-  where a leaf of the pt formula is unknown (Kleene's stream finds them); otherwise, or past
-  :data:`CONCURRENT_STATES` states after the last, followed in one more read.
-
-The verdict is then set by :func:`finalize_three` as :func:`fretc.audit.finalize.finalize`
-sets it after :func:`~fretc.audit.unknown_ticks.judge_three`: the audit JSON is the same
-bytes (``tests/audit/test_streamed.py``). A requirement is judged whole after all where the
-streams cannot take it a chunk at a time: an automaton or atom they do not evaluate a chunk at
-a time (an uninterpreted function, a comparison over ``pre``), more than
-:data:`fretc.monitors.definite.MAX_RUNS` runs of unknown ticks, or a ``cut`` row (judged
-whole as before). Memory: per requirement the streams' state (as
-:mod:`fretc.audit.streamed`'s, the runs of unknown ticks, at most
-:data:`fretc.monitors.completions.MAX_STATES` states of the completions), and the rows of the
-trace's ``unknown`` cells and ``gap`` rows. CPU: one read of the trace more (two where the
-completions could not be followed beside the other streams).
+The audit reads such a trace again (within :attr:`fretc.logs.CsvSource.extent`), feeding each
+requirement the three-valued judge's streams a chunk of rows at a time (Kleene's reading,
+the LTL3 verdict, the definite failed triggers, the NaN and unknown ticks, the completions);
+:func:`finalize_three` then sets the verdict as :func:`fretc.audit.finalize.finalize` does:
+the audit JSON is the same bytes (``tests/audit/test_streamed.py``). What is judged whole
+instead, and the memory and CPU it takes: ARCHITECTURE.md ("Three-valued CSV traces, streamed").
 """
 
 from __future__ import annotations

@@ -1,55 +1,15 @@
 """The queries of ``fretc check`` that run in Spot's process: Spot's automata and games,
 and the BDD fixed points (BuDDy, shipped with Spot), each within the query's budgets.
 
-Spot's translations and game solving run in C++ and cannot be stopped from Python, so the
-queries run in one forked worker process (:class:`SpotWorker`), and no answer depends on
-time: the BDD engines count their work (:mod:`fretc.check.budget`); what Spot is given is bounded
-before it starts (:data:`SPOT_MAX_STATES`, and the tick bounds :mod:`fretc.check.checker` gives
-it), so a Spot query finishes or is refused; BuDDy's node table is capped at the memory
-budget (``bdd_setmaxnodenum``: BuDDy stops the worker when it would grow past it, and the
-query answers :data:`UNKNOWN` with that reason; the next query starts a new worker). The
-run's wall-clock limit (``deadline``) only stops the whole run (:class:`fretc.check.budget.
-RunStopped`). Queries and answers are plain Python values (formulas as Spot text), so they
-pickle cheaply through a pipe.
-
-Queries (all on infinite words, Spot's LTL semantics):
-
-* ``("sat", base, extra)`` (``base`` one formula or a list of conjuncts, ``extra`` more
-  conjuncts) -> ``(True, word)`` with ``word = (prefix, cycle)``, each a list of
-  ``{ap: bool}`` letters (atoms a letter leaves free are absent), or ``(False, None)``.
-* ``("satisfiable", base, extra)`` -> True or False: the ``sat`` query's answer without its
-  word (:meth:`_Session.satisfiable`: a product started from ``extra``, which ends far
-  sooner when the conjunction is empty; the redundancy of a requirement asks it).
-* ``("realizable", f, outputs)`` (``f`` one formula or a list of conjuncts) -> ``(True, mealy_states)`` or ``(False, counter)`` where
-  ``counter`` is an input lasso ``(prefix, cycle)`` that defeats every controller (no output
-  sequence satisfies ``f`` along it), or None when the environment must react to the
-  outputs (no fixed input sequence wins). Uses Spot's synthesis games:
-  ``spot.ltl_to_game``, ``spot.solve_game``, ``spot.solved_game_to_mealy`` (Spot >= 2.10,
-  ``ltlsynt``'s engine).
-* ``("call", function, args)``: ``function(*args, budget=budget)``, a module-level function
-  of a later layer (pickled by name) that works with Spot or BuDDy in this process under the
-  query's budget: ``fretc shield``'s synthesis (:mod:`fretc.shield.synthesis`);
-* ``("safety_game", pts, inputs, env_inv, ctl_inv)``: the symbolic safety game of
-  :func:`fretc.check.safety_game.solve_game` (its answer dict).
-* ``("buchi_game", pts, liveness, inputs, env_inv, ctl_inv, search)``: the Büchi game of
-  :func:`fretc.check.buchi_game.solve_buchi_game` (its answer dict).
-* ``("monitor_sat", safe, goals, invariant, finite, length, liveness, last)``: the fixed
-  points of :func:`fretc.check.monitor_sat.decide`.
-* ``("smt", formulas)``: z3's answer to :meth:`fretc.check.smt.SmtSolver.sat` (IR formulas) as
-  ``(answer, failures, spent, out_of_memory)``, with z3's memory capped at the query's
-  memory budget (:func:`fretc.check.smt.solve_capped`; the cap is process-wide, so this query is
-  meant for the worker). The worker sends the first three; a query that ran out of memory
-  leaves z3's state unusable, so the worker ends after answering it and the next query
-  starts a new one.
-
-The worker adds the query's :class:`fretc.check.budget.Budget` to the BDD queries.
-
-Same query, same answer: a worker's automata are made in a BDD dictionary of its own (Spot
-numbers an atom's BDD variable when it is first registered in a dictionary, and the word
-Spot finds depends on that numbering), and each game query in a new one
-(:func:`fretc.check.safety_game.new_bdd_dict`), never in Spot's process-wide default
-dictionary, which keeps what earlier work of the process (or of the parent a worker was
-forked from) registered.
+The queries run in one forked worker process (:class:`SpotWorker`); no answer depends on
+time: the BDD engines count their work (:mod:`fretc.check.budget`), what Spot is given is
+bounded before it starts (:data:`SPOT_MAX_STATES`), BuDDy's node table is capped at the memory
+budget (past it the query answers :data:`UNKNOWN` and the next one starts a new worker).
+Queries and answers are plain Python values (formulas as Spot text), pickled through a pipe:
+``("sat", base, extra)``, ``("satisfiable", base, extra)``, ``("realizable", f, outputs)``,
+``("call", function, args)``, ``("safety_game", ...)``, ``("buchi_game", ...)``,
+``("monitor_sat", ...)``, ``("smt", formulas)``. Each query's arguments and answer, and why
+the worker is built so: ARCHITECTURE.md ("Spot's worker").
 """
 
 from __future__ import annotations

@@ -19,51 +19,9 @@ Files ``<name>_shield.h`` and ``<name>_shield.c`` (prefix ``P`` = the name), and
   the first that holds: 1 an input, 3 a machine that no longer knows its state, 2 a proposal,
   4 an output bounded by the inputs given the number nearest the fallback's.
 
-**Outputs bounded by the inputs** (:mod:`fretc.check.bounds`) are computed as the Python
-form computes them (:mod:`fretc.shield.runtime_bounds`): per bound a C function of its
-comparison with the output's value ``x`` and one of its bound's value, each comparison's
-threshold found by the same galloping and bisection over the doubles' order (the threshold is
-unique: the same number), the proposal clamped between the decided comparisons' ends; and
-each twist is scaled as the Python form scales it, the outputs struct holding a twist's
-output no requirement reads.
-
-**An input number that is NaN is any value**, as in the Python form (its module docstring):
-each machine keeps a *belief*, the states it may be in, in an array of fixed capacity in the
-state (:data:`C_BELIEF_LIMIT` states, fewer when the state bits have fewer; sorted as the
-Python form sorts its tuples, ``belief[0]`` the state while it knows it), a count and a lost
-flag. A tick with a NaN input (or a belief of several states) is decided for every case: each
-valuation of the input atoms that read the NaN inputs (at most 2^k, ``k`` at most
-:data:`C_FREE_LIMIT`), in binary order, that ``env_ok`` allows, with each state of the
-belief; the proposal kept when ``safe`` holds in every case, else the cheapest of the cases'
-own corrections and the fallback's atoms that is safe in every case (the first met of those
-as cheap: Python's ``min`` over the candidates in its order), the reasons those of
-``decide_cases``, the next belief every state reached, the assumptions broken only when
-broken in every case. Past :data:`C_BELIEF_LIMIT` states or :data:`C_CASES_LIMIT` cases (the
-Python form's bounds), past ``C_FREE_LIMIT`` free atoms (a bound the Python form does not
-have: a machine with more than 16 input atoms reading NaN inputs at one tick is lost in C,
-where the Python form may still decide it), or when no candidate is safe in every case, the machine is
-lost: it gives the fallback's outputs until ``P_shield_init`` (none without a fallback: -1).
-Every buffer of the cases is in the state (no allocation); a step takes at most
-``C_CASES_LIMIT`` corrections and as many walks of each candidate: constant time.
-
-**The outputs of one message are one message's** (:mod:`fretc.shield.message_model`, KP-124):
-a proposed number of a message group that is NaN or infinite replaces every output of the
-group (the fallback's values, else left to the correction), and a decision whose values of a
-group are not the proposal's is made one message as the Python form makes it
-(:func:`fretc.shield.runtime_values.as_message`): per group a table of the messages the
-bindings give its valuations (one double per field), a writer per number (a field, ``-x``,
-``abs(x)``), the write orders, and the bindings as C expressions over the fields
-(:func:`c_message`), constant time.
-
-A comparison of several variables (:mod:`fretc.shield.predicates`) is computed in doubles
-as the Python runtime computes it (:func:`c_term`); when an override changes an atom of an
-output cluster, the cluster's variables take the numbers recorded for the new valuation (a
-table searched linearly: constant time and memory). Each machine whose variables fit in 64
-bits keeps a memo of its decisions in the state (:data:`MEMO_SLOTS` direct-mapped slots:
-correction, reasons, next state), as the Python form caches its corrections: a tick met
-before costs a lookup, a miss what the step costs without it. The memo is keyed by one state:
-a machine whose belief holds several states, or one of whose input atoms reads a NaN input,
-decides without it (and does not fill it).
+How the C form computes bounds, NaN inputs (beliefs, :data:`C_BELIEF_LIMIT`,
+:data:`C_CASES_LIMIT`, :data:`C_FREE_LIMIT`), messages, comparisons of several variables and
+its memo (:data:`MEMO_SLOTS`) as the Python form does: ARCHITECTURE.md ("The shield in C").
 """
 
 from __future__ import annotations

@@ -3,53 +3,14 @@ shield decides, its AJPF verification environment and the properties AJPF checks
 (Safe-ROS, Benjumea, Farrell, Dennis, FMAS 2025, Listings 2, 4 and 5: the SIF as a Gwendolen
 agent, its environment and its AJPF properties; here generated from the requirements).
 
-Files (``N`` the shield's name made an identifier, ``A`` the agent: the component of the first
-enforced requirement, Safe-ROS's ``agilex_agent``):
-
-* ``N.gwen``: the agent. Its beliefs hold the shield's state between ticks and the outputs it
-  decided; each tick (the percept ``tick(0|1)`` changes) it decides with the shield's machine,
-  believes the outputs and state that the machine gives, and publishes the outputs:
-  ``+tick(T) : {B mem(State, Was, Broken)} <- shield(State, Out, Next, Now), -mem(...),
-  +mem(Next, Out, Now), publish(Out);``. The action ``shield/4`` is the shield's step at the
-  level of its atoms (``N_shield.java``), so the stop is held and released exactly as the
-  Python, C and ROS 2 forms hold and release it (tests/shield/test_gwendolen.py steps both).
-  Each output atom (a boolean output, a comparison of a numeric one: ``linear_speed <= 0.15``
-  is the belief ``linear_speed_le_0_15``) is a belief the reasoning rules read off ``mem``;
-  ``decided`` holds once the agent has decided a tick, ``assumption_broken`` once an
-  assumption of the environment (``--assume``) has been broken.
-* ``N_shield.java``: the machines (node tables, the correction of
-  :class:`fretc.shield.runtime.ShieldRuntime` with the same costs and ties), standard Java;
-  its ``main`` steps lines of 0/1 strings, which the tests compare with the Python form.
-  An input that cannot be read is any value, as in the Python and C forms (the runtime's
-  ``decide_cases``, the C form's ``_cases``: the same cases in the same order, costs, ties,
-  :data:`~fretc.shield.runtime.CASES_LIMIT` and :data:`~fretc.shield.runtime.BELIEF_LIMIT`):
-  an input atom ``x`` reads such a variable, and the machine decides outputs safe in every
-  case, its state becoming a belief of several states (written ``s1|s2``, one part per
-  machine separated by ``/``, or ``lost``: the fallback's outputs until reset). A tick with
-  every atom read and one state per machine takes the single-state step as before.
-* ``N_env.java``: the verification environment: at each perception every input atom takes a
-  value real numbers give (the machine's ``env_ok``) and the controller proposes ``push``
-  (every output atom the opposite of the fallback's, as near as one message allows: the
-  controller that always wants to move) or ``stop`` (the fallback's atoms), by AJPF's choice;
-  the agent perceives the input atoms that hold and the proposal's name (``proposal(push)``).
-  With the setting ``N_env.unreadable = a,b`` (in an ``.ail`` file; default none, the
-  choices then exactly as without it) AJPF may also choose, for those input atoms, that they
-  cannot be read: the agent does not perceive such an atom, and the environment gives
-  ``shield/4`` the atom as unknown (``x``), so the agent's plans and properties are
-  unchanged: a property reads the atoms the agent perceived. The state the agent believes is
-  ``s(0,1,...)`` while the machine knows its one state, else ``s("TEXT")`` (the belief in
-  ``N_shield.java``'s notation); the outputs are ``none`` when there are none (a machine
-  lost without a fallback: ``decided`` does not hold).
-* ``N.ail``: the AIL configuration (the agent, its builder, the environment;
-  ``ajpf.transition_every_reasoning_cycle = false``, so that AJPF's model states are the
-  ticks: a property is read where a tick's inputs and its decided outputs are both believed).
-  ``N_LABEL.ail`` per property: the environment changing only the inputs that property's
-  requirement reads and those of the requirements sharing an output with it (the others stay
-  false; a release property's, the controller proposing ``push`` only), which AJPF explores
-  in minutes where every input takes hours.
-* ``N.psl``: one AJPF property per enforced requirement (:mod:`fretc.shield.agent_properties`:
-  ``immediately`` exactly, over ticks; what AJPF's LTL cannot count said in the file) and the
-  release of each stop output (``release_stopped``).
+Files (``N`` the shield's name made an identifier): ``N.gwen`` the agent (each tick it
+decides with the shield's machine through the action ``shield/4``, believes the outputs and
+the state, and publishes the outputs), ``N_shield.java`` the machines (the correction of
+:class:`fretc.shield.runtime.ShieldRuntime`, an unreadable input any value, as the Python and
+C forms), ``N_env.java`` the verification environment, ``N.ail`` and ``N_LABEL.ail`` the AIL
+configurations, ``N.psl`` one AJPF property per enforced requirement
+(:mod:`fretc.shield.agent_properties`). What each file holds in full: ARCHITECTURE.md ("The
+Gwendolen agent").
 
 ``fretc ajpf DIR`` compiles the Java files against MCAPL and runs AJPF on every property
 (:mod:`fretc.shield.ajpf_run`).

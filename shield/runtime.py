@@ -4,80 +4,14 @@
 ``fretc shield --emit python`` writes this module's source, unchanged, into the generated
 module, followed by the shield's tables (:func:`fretc.shield.emit_python.tables`), so the
 generated module needs nothing but Python; in process (the simulator, the tests) the same
-class runs from here.
-
-Tables: ``{"name", "digest", "inputs", "outputs", "machines": [...]}``; a machine is
-``{"requirements": [ids], "inputs": [(variable, op, constant)], "outputs": [...], "texts":
-[output atom texts], "init": [0/1], "nodes": [(var, low, high)], "safe": int, "next":
-[int], "keep": [int], "weights": {output atom: (wanted 0/1, weight)}, "groups": [...]}``
-(``op`` None for a boolean variable; ``"pred"`` for a comparison of several variables, whose
-third element is then its term, :func:`term_value`: ``(variable, "pred", term)`` with
-``variable`` the first it reads). A group is the output atoms of one message:
-``{"atoms": [indices], "topics": [...], "numbers": {valuation: {variable: value}}, "fields":
-{valuation: [(topic, path, value)]}}``, a valuation being the atoms' values as bits (first
-atom least significant): the message fields the bindings give it by and that message's
-numbers (:mod:`fretc.shield.plan`); a numeric output of a group whose boolean atoms an
-override changed takes them (:mod:`fretc.shield.messages` publishes the fields). A group's
-``"message"`` (None when its bindings are no such terms) is its bindings as terms over the
-message's fields (:mod:`fretc.shield.message_model`): a decision that is not the proposal's
-message is made one, the decided numbers written into the message solved for the decided
-valuation and its values read back (:func:`as_message`), so that the outputs the machines step
-on and report are one message's (KP-124: ``cmd_linear = 0.0`` beside ``driving_forward``,
-both of ``/cmd_vel.linear.x``, was none). A machine's
-``"clusters"`` (:mod:`fretc.shield.predicates`) are ``{"atoms": [output atom indices],
-"variables": [...], "numbers": {valuation: {variable: value}}}``: when an override changes
-one of a cluster's atoms, its variables take the numbers recorded for the new valuation.
-The tables' ``"fallback"`` (None when there is none) is ``{"outputs": {variable: value},
-"atoms": [[0/1 per output atom] per machine]}``: outputs that keep every requirement
-winnable from every state of the winning region whatever the inputs
-(:func:`fretc.shield.build.fallback_of`).
-
-**A step is all or nothing.** Every value a machine reads is checked before any machine
-moves (:func:`read_value`): a missing variable, a value of the wrong type (a boolean is
-``True``/``False`` or the integer 0 or 1; a number an ``int`` or ``float``, never a bool
-or a string), a NaN, an integer no double holds (``10**400``) and, for a proposal, an
-infinite number (no actuator takes one) cannot be read. Then:
-
-* an **input** that cannot be read is **any value**: the atoms that read it take every truth
-  value real numbers give them (the machine's ``env_ok``), and the step decides for all of
-  them at once. Each machine keeps the set of states it may be in (its *belief*, one state
-  while every input is read): the outputs are the proposal when it is safe from every state
-  of the belief with every value the unreadable input could have had, else the safe outputs
-  nearest it among each case's own correction and the fallback's, and the next belief is
-  every state those outputs lead to. So a trigger the shield can read is never lost (a NaN
-  in another requirement's input at the tick ``a`` rises still starts ``a``'s deadline), and
-  the enforced requirements hold whatever the unread value was. ``Decision.fault`` says
-  which input and why (an infinite input is read: REP 117's ``+inf`` is "no return", which
-  a comparison reads). The belief is bounded (:data:`BELIEF_LIMIT` states,
-  :data:`CASES_LIMIT` cases a tick); past a bound, or when no outputs are safe in every case
-  (a shield without a fallback), the machine no longer knows its state: it gives the
-  fallback's outputs (none without one), and ``Decision.fault`` says so, until it knows its
-  state again. **A lost state recovers** by itself when the machine's requirements look back
-  a bounded number of ticks ``L`` (the tables' ``"lookback"``,
-  :func:`fretc.shield.lookback.lookback`): beside the lost machine a copy runs from the
-  initial state on the ticks whose inputs it reads (the fallback's outputs, as given), and
-  after ``L + 1`` such ticks in a row its state is the machine's again (``Decision.recovered``
-  names the requirements; an unreadable input starts the count again). Without such a bound
-  (an unbounded ``since``, ``once``, a mode scope) only :meth:`ShieldRuntime.reset` does;
-  ``Decision.fault`` says which;
-* a **proposed output** that cannot be read is replaced, never passed on, and so is every
-  output of its message group (they were read from one message that cannot be read: a
-  ``driving_forward`` read from ``linear.x = +inf`` is not kept beside the replaced
-  ``cmd_linear``): by the fallback's value of each variable, then decided as any proposal
-  (the state moves); without a fallback their atoms are left to the correction (any value
-  of theirs costs nothing). ``Decision.fault`` says which and why; ``overridden`` is true.
-
-**Outputs bounded by the inputs and twists** (a machine's ``"bounds"`` and ``"twists"``):
-the number of a bounded output and the scaling of a twist are
-:mod:`fretc.shield.runtime_bounds`' (``Decision.fault`` names a bound no finite number met,
-``Decision.scaled`` each twist scaled); an input a bound reads is an input the machine reads.
-
-**Assumptions of the environment** (``fretc shield --assume``): a machine's ``"assumptions"``
-(ids) and ``"assumed"`` (per assumption the root of "it has held at every tick so far") are
-read after each decision. Once one has not held, the machine's guarantee no longer holds
-(its game counted every requirement kept from then on): ``Decision.broken`` names the broken
-assumptions, and the outputs are the fallback's from that tick on (none without a
-fallback), the state moving as usual.
+class runs from here. :class:`ShieldRuntime` takes the tables (a dict: ``"machines"``, their
+node tables, groups, clusters, bounds, assumptions, and the ``"fallback"``) and steps them
+on one tick's inputs and proposal, giving a :class:`Decision` (the outputs, ``overridden``,
+``fault``, ``recovered``, ``scaled``, ``broken``). A step is all or nothing: every value is
+checked (:func:`read_value`) before any machine moves; an unreadable input is any value (the
+machine's belief), an unreadable proposal is replaced with its message group. The tables'
+schema and the rules of beliefs, recovery, bounds and assumptions are in ARCHITECTURE.md
+("The shield's step at run time").
 """
 
 from __future__ import annotations

@@ -1,59 +1,14 @@
 """PX4 flight logs (ULog, ``*.ulg``) as a :class:`~fretc.logs.base.LogSource`, read with
 ``pyulog`` (PX4's own ULog library; format: PX4 "ULog File Format" documentation).
 
-Topics, named as Foxglove names them when it opens a ``.ulg``:
-
-* one topic per logged uORB topic, named after its message (``vehicle_status``,
-  ``battery_status``); PX4 logs several instances of some topics (two batteries, three
-  gyros): instance 0 keeps the plain name and instance *k* > 0 is ``NAME/k``
-  (``battery_status/1``), so instances are never interleaved on one topic (Foxglove shows
-  them merged under one name);
-* ``NAME/*``: every instance of uORB message ``NAME`` on one topic, in log time, each
-  message with one field more, ``multi_id`` (``uint8``: ULog's ``multi_id`` of its
-  subscription, 0 for the plain topic's, *k* for ``NAME/k``'s; ULog's own word, as
-  ``instance`` is a field of some uORB messages, ``parameter_update``'s), its type
-  ``px4_msgs/msg/<CamelName>Instances``. So the instances of a topic are the entities of
-  one kind, the instance number the key of one value per message (docs/bindings.md, "One
-  message, one entity"; issue 91): ``[entities] gps = '"sensor_gps/*".multi_id'``, with
-  ``eph = '"sensor_gps/*"{multi_id==$gps}.eph'``, judges each GPS on its own messages. A
-  log of one instance has it too (one entity, instance 0); a uORB message with a field
-  ``multi_id`` of its own has none;
-* ``Log``: PX4's logged text messages (``mavlink_log``, ``PX4_INFO`` ...), with Foxglove's
-  fields: ``level`` on the rosgraph_msgs/Log scale (``DEBUG`` 1, ``INFO`` 2, ``WARN`` 4,
-  ``ERROR`` 8, ``FATAL`` 16, named constants of the topic) from ULog's syslog level, ``msg``
-  the text, ``tag`` the tag of a tagged message (0 otherwise);
-* ``Parameter``: parameter changes during the flight (``name``, ``value``).
-
-Names without a leading ``/`` are written quoted in bindings: ``'"battery_status".remaining
-< 0.2'``. Every field of a uORB message is a field of its topic (arrays as arrays:
-``"actuator_outputs".output[0]``; nested uORB types as nested messages), with the types of
-the ULog format definitions (``uint8_t`` is ``uint8``, ``float`` is ``float32``, ``char[N]``
-a string); padding fields are left out. The message types are ``px4_msgs/msg/<CamelName>``
-(the naming of PX4's ROS 2 messages), whose definitions :func:`ulog_schemas` gives for the
-binding checks and ``fretc inspect``.
-
-Log time is the message's ``timestamp`` field (microseconds of the flight controller's
-clock, usually since boot) in ns; messages are delivered in non-decreasing log time over all
-topics. PX4's logger writes, when it subscribes to a topic, the topic's last sample, stamped
-when it was published (before the ULog header's start: ``vehicle_status`` 220 ms before it in
-a SITL flight): that first row of each topic is data, at its own time, as uORB held it. A
-timestamp of 0 (never set) and any later row stamped before the header's start (a
-timestamp kept since boot while the message was logged again and again: ``commander_state``
-678 times at 2.07 s in a flight logged from 112.5 s) are skipped as an
-:data:`EARLY_TIMESTAMP` problem: their time says nothing of when they were logged. A ULog
-**dropout** (the logger lost messages for a number of milliseconds) is damage: a
-:data:`DROPOUT` problem and a gap of the log from the last timestamp before it (only the span
-before it is judged; nothing is held over it). A file cut short (its last message runs past
-its end) or with bytes that are not ULog messages (zeroed, overwritten) is damage too, which
-pyulog reads quietly as a shorter flight: the framing is checked first
-(:mod:`fretc.logs.flight.ulog_framing`), a cut is a gap to the end of the log, and a damaged span a
-gap to the first message after the next sync message (each intact run read on its own).
-
-Opening a ULog reads it whole, once (every topic's rows as numpy arrays, kept for the passes
-of the audit: dropouts are dated only by a read of every topic, so that read is needed
-anyway): a sound file by one walk over its messages and numpy gathers
-(:mod:`fretc.logs.flight.ulog_fast`, the same rows as pyulog's), any other with the framing walk
-and pyulog; :meth:`UlogSource.messages` then builds one message object per row.
+Topics are named as Foxglove names them when it opens a ``.ulg``: one per logged uORB topic
+(instance *k* > 0 as ``NAME/k``), ``NAME/*`` every instance with a field ``multi_id`` (the
+instances as entities), ``Log`` (PX4's text messages) and ``Parameter``; message types are
+``px4_msgs/msg/<CamelName>`` (:func:`ulog_schemas`). Log time is the message's
+``timestamp`` (microseconds of the flight controller's clock) in ns, non-decreasing over all
+topics. Early timestamps are an :data:`EARLY_TIMESTAMP` problem; dropouts (:data:`DROPOUT`),
+cut files and damaged spans are damage, a gap of the log. The topics, fields, times and
+damage in full, and how a ULog is read: ARCHITECTURE.md ("PX4 flight logs").
 """
 
 from __future__ import annotations
