@@ -17,3 +17,19 @@ PEAK_KB = (
     "        pass\n"
     "    import resource\n"
     "    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss\n")
+
+
+def traced_audit(plan, path) -> tuple:
+    """(the audit of the log at ``path`` by ``plan``, the traced peak of Python's allocations
+    during it in bytes: :mod:`tracemalloc`)."""
+    import tracemalloc
+
+    from fretc.audit import audit_log
+
+    tracemalloc.start()
+    try:
+        la = audit_log(plan, str(path))
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    return la, peak

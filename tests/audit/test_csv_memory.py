@@ -10,14 +10,14 @@ out; the whole-trace judge, measured the same way, grows by its columns (the tes
 
 from __future__ import annotations
 
-import tracemalloc
 
 import numpy as np
 
 import pytest
 
 import fretc.audit.streamed as streamed
-from fretc.audit import AuditConfig, audit_log, load_plan
+from _peak import traced_audit
+from fretc.audit import AuditConfig, load_plan
 
 #: The growth allowed a row when the rows are judged as they are read: none but noise (the
 #: streams keep a chunk of rows, a bounded window's last ticks, the margin's points).
@@ -58,12 +58,7 @@ def _write(path, rows: int, nan: str = "") -> None:
 
 
 def _peak(plan, path, want: tuple[str, str] = ("satisfied", "satisfied")) -> int:
-    tracemalloc.start()
-    try:
-        la = audit_log(plan, str(path))
-        peak = tracemalloc.get_traced_memory()[1]
-    finally:
-        tracemalloc.stop()
+    la, peak = traced_audit(plan, path)
     verdicts = tuple(v.verdict for v in la.verdicts)
     assert verdicts == want, verdicts
     return peak

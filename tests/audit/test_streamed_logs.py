@@ -14,7 +14,6 @@ from __future__ import annotations
 
 import json
 import sys
-import tracemalloc
 from pathlib import Path
 
 import pytest
@@ -24,6 +23,7 @@ from _logs import MS, boolean, twist, write_mcap
 from test_metamorphic import ALL, SAMPLE, _case
 
 import fretc.audit.streamed_log as streamed_log
+from _peak import traced_audit
 from fretc.audit import AuditConfig, audit_log, load_plan
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -173,12 +173,7 @@ def _write_run(path: Path, ticks: int) -> None:
 
 
 def _peak(plan, path: Path) -> int:
-    tracemalloc.start()
-    try:
-        la = audit_log(plan, str(path))
-        peak = tracemalloc.get_traced_memory()[1]
-    finally:
-        tracemalloc.stop()
+    la, peak = traced_audit(plan, path)
     assert [v.verdict for v in la.verdicts] == ["satisfied", "satisfied", "violated"], \
         la.verdicts
     return peak
