@@ -2,49 +2,12 @@
 text and bytecode of checked monitor modules).
 
 Everything cached here is a pure function of its key, and every key names all the inputs
-of the computation (e.g. the grammar text and Lark's version; a formula's shape and Spot's
-version), so an entry is never stale: when an input changes, its key changes. Entries are
-written to a temporary file in the same folder and renamed into place (``os.replace``,
-atomic on POSIX and Windows), so a reader sees a whole entry or none. A cache that cannot
-be read or written (read-only home, full disk, ``FRETC_CACHE_DIR=""``) is skipped
-silently: the caller computes the value again, so the cache changes speed, never output.
-
-The cache is not trusted blindly: some entries are code (the ``marshal`` data of compiled
-monitor modules and Jinja templates, module text that is executed), and others decide
-output (a requirement's parsed AST). So:
-
-* **Location.** ``$FRETC_CACHE_DIR`` if set (empty: no disk cache), else
-  ``$XDG_CACHE_HOME/fretc``, else ``~/.cache/fretc``. A relative ``XDG_CACHE_HOME`` is
-  ignored (the XDG Base Directory Specification 0.8: "If an implementation encounters a
-  relative path in any of these variables it should consider the path invalid and ignore
-  it"); so is a relative ``FRETC_CACHE_DIR``, with a warning: a relative folder would be
-  whatever the current folder holds, e.g. a checked-out repository's.
-* **A private folder.** Folders are created with mode 0700 whatever the umask (the missing
-  parents too, as the XDG specification asks). A cache folder is used only when it, and
-  each folder above it, is owned by the user running fretc (or by root, above it) and not
-  writable by group or others (a folder above it may be, with the sticky bit, as ``/tmp``):
-  what OpenSSH's ``StrictModes`` asks of ``~/.ssh``. Otherwise the cache is skipped with
-  one warning on the standard error (never a failure).
-* **Sealed entries.** Every entry carries an HMAC-SHA256 (RFC 2104) of its kind, name and
-  bytes under a key of the cache folder (:func:`_seal_key`): HMAC-SHA256 of the folder's
-  identity (its resolved path, device and inode) under a secret key of 32 random bytes that
-  fretc keeps *outside* every cache folder, in the user's state folder (:func:`key_dir`:
-  ``$FRETC_STATE_DIR``, else ``$XDG_STATE_HOME/fretc``, else ``~/.local/state/fretc``; file
-  ``seal-key``). The key's folder is used only when it is owned by the user with mode 0700
-  (no access for group or others; the folders above it as the cache's), is not inside the
-  cache folder, and the key is a regular file of the user's, mode 0600 or less, of 32 bytes;
-  otherwise the cache is not used (one warning). So a cache folder copied or restored with
-  its modes (a CI cache, a tar file, an image layer) brings no key: it is another folder, its
-  entries' seals do not verify, and every entry is a miss, recomputed; nobody who can only
-  copy a cache folder can seal an entry of their own (an entry that runs code, or one that
-  turns a violated requirement into a satisfied one). An entry whose seal does not verify
-  (planted, altered, copied from another cache or another folder) is a miss, never decoded.
-  Data entries are JSON or ``marshal`` data of plain values (no pickle): decoding them runs
-  no code. (Until hostile round 9, the key was a file ``seal-key`` in the cache folder itself, and
-  travelled with it; such a file is now ignored.)
-* **Bounded reads.** An entry is read only when it is a regular file (opened without
-  following a symbolic link, non-blocking, checked with ``fstat`` after the open: a FIFO or a
-  link to ``/dev/zero`` is a miss) owned by the user and at most :data:`MAX_ENTRY_BYTES`.
+of the computation, so an entry is never stale; entries are renamed into place
+(``os.replace``), so a reader sees a whole entry or none; a cache that cannot be read or
+written is skipped silently: the cache changes speed, never output. It is not trusted
+blindly: a private folder (:func:`cache_dir`), entries sealed by an HMAC under a key kept
+outside every cache folder (:func:`key_dir`), reads bounded (:data:`MAX_ENTRY_BYTES`). The
+rules in full (location, modes, the seal, bounded reads): ARCHITECTURE.md ("fretc's cache").
 """
 
 from __future__ import annotations

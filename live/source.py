@@ -2,51 +2,13 @@
 whose messages come from a Foxglove WebSocket server, and the verdict events
 (:class:`WatchEvent`). The recording of a watch is :mod:`fretc.live.record`.
 
-Faults, each a data problem of the run, never a crash:
-
-* a dropped connection is retried with backoff; the messages lost in between are a
-  :data:`CONNECTION_GAP` problem (log time of the last message before, of the first after,
-  the wall-clock length). Ticks strictly inside the gap are **not evaluated** (counted as
-  unknown, never held over the gap); the monitors keep their state and go on from the next
-  message. A run with a gap is ``partial`` and cannot exit 0. A connection that closes with
-  nothing after it before the watch ends is the end of the watched run
-  (:data:`CONNECTION_CLOSED`, reported, not a gap);
-* a bound topic the server stops advertising while the run goes on (its publisher left: a
-  node restarted or died, a DDS writer or Zenoh token gone): a ``publisher`` event, and its
-  values are **not held**: from the last message used before it until the topic's next
-  message, ticks of the requirements that read its values are not evaluated (unknown);
-  when it never comes back before the run ends, its values are unknown from there to the
-  end of the run at the ticks of the clocks that read it, and a clock with no tick past it
-  is cut there (an obligation open at the cut is ``unknown``); the others are not affected
-  (:mod:`fretc.live.absence`). With no publisher nothing was sent: the span is a silence,
-  no data problem, and what ``age(/topic)`` reads is known in it (a staleness requirement
-  is judged); only a restart over a client that subscribes again after the new
-  advertisement (the Foxglove WebSocket protocol, rosbridge) may have lost messages: a
-  :data:`PUBLISHER_RESTART` problem;
-
-The end of the watched run, never a data problem: the server's orderly close (a WebSocket
-close frame), every subscribed topic unadvertised, the deadline (``--duration``), no message
-for ``idle`` seconds (``--until-idle``), or :meth:`WatchSource.stop` (Ctrl-C). The reason is
-:attr:`WatchSource.end_reason`.
-* a message on a watched topic that does not decode (its payload, or every payload of a
-  channel whose schema could not be read): ``undecodable``, counted per message, and a gap
-  (:data:`UNDECODABLE_GAP`) from the last message used to the next one: its value is never
-  held over the message that was lost (as :mod:`fretc.audit.damage` for logs). A run that
-  ends inside such a gap is ``partial`` from the last message used;
-* a log time (or, under the header time base, what the clock sees) going backwards:
-  :data:`CLOCK_BACKWARDS` (the message is skipped: the past is not rewritten), and a gap
-  from the last message used to the next one, as for a message not decoded;
-* a bound topic not advertised within ``wait`` seconds of connecting, or advertised with a
-  schema that cannot be decoded: the requirements reading it are ``error`` (as a topic
-  missing from a log in an audit); the others are watched;
-* a frame of the wrong shape (the client's ``protocol`` event: a JSON array where an object
-  goes, a truncated message frame, an advertisement flood): :data:`PROTOCOL` (the frame is
-  ignored, the session goes on); a server whose connections keep sending such frames and
-  dropping ends the run (the client's ``gave_up``);
-* a log time outside ``[0, 2**63)`` ns (MCAP's log times are uint64, numpy's and the
-  clocks' int64), or one that jumps further past the last message used than
-  :attr:`WatchSource.max_jump_ns` (the ticks in between would be made one by one, live):
-  :data:`TIME_RANGE` (the message is skipped, a gap as for a message not decoded).
+Faults are data problems of the run, never a crash: a dropped connection
+(:data:`CONNECTION_GAP`), a publisher that left (:data:`PUBLISHER_RESTART`), a message that
+does not decode (:data:`UNDECODABLE_GAP`), a clock going backwards (:data:`CLOCK_BACKWARDS`),
+a frame of the wrong shape (:data:`PROTOCOL`), a log time out of range (:data:`TIME_RANGE`);
+the ticks they leave are unknown, never held over. The end of the run is
+:attr:`WatchSource.end_reason`. Each fault and end in full: ARCHITECTURE.md ("The watched
+run as a log").
 """
 
 from __future__ import annotations

@@ -5,47 +5,12 @@ feeding it one chunk (:func:`evaluate_requirement`).
 The monitors decide a requirement with its past-time formula; this module decides it again
 from the meaning the formulas encode (``../shared/fretish/README.md`` sections 2-4; FRET's
 ``fretishSemantics`` manual; Giannakopoulou et al., IST 2021), without any formula code, and
-says *why*:
-
-1. **Scope intervals** (inclusive tick ranges ``[s, e]``) are the maximal runs of one
-   membership flag: ``null`` every tick; ``in`` ``M``; ``notin``/``onlyIn`` ``!M``;
-   ``before`` "no ``M`` so far"; ``onlyBefore`` "some ``M`` so far"; ``after`` "``M`` has
-   fallen (``!M`` right after ``M``) so far"; ``onlyAfter`` "``M`` has not fallen yet".
-   ``only*`` scopes check the *complement* with the response negated. An interval is closed
-   at ``e`` when the tick after ``e`` is out of it, or at the end of the trace.
-2. **Trigger points** in each interval from the condition ``C`` (:func:`trigger_ticks`):
-   ``null`` the interval's first point; ``holding`` (``whenever``) every point where ``C``
-   holds; ``regular`` every point where ``C`` becomes true, or holds at the interval's first
-   point.
-3. **The timing's obligation** from each trigger ``t`` until the interval end ``e``
-   (:data:`fretc.monitors.obligations.OBLIGATIONS`), e.g. ``within k``: ``R`` somewhere in
-   ``[t, t+k]``, vacuous when ``e < t+k``; ``only*`` scopes use the negated obligation.
-   Decided chunk by chunk by :mod:`fretc.monitors.interval_fates`.
-
-A requirement holds iff every trigger meets its obligation; it holds *vacuously* when there is
-no scope interval or no trigger. The first violation is the earliest trigger (in tick order)
-whose obligation fails; :class:`Violation` gives its scope interval, the response window
-looked at and the tick at which the obligation was definitely missed.
-
-**Expressions** are evaluated over numpy columns by :mod:`fretc.monitors.expressions` with the
-generated monitors' value conventions (a number read as a condition is ``bool(x)``; ``/`` by
-zero is NaN). A requirement whose expressions are *pointwise* (their value at a tick reads that
-tick's column values only; ``FTP`` with the chunk's offset) is fed any chunks. FRET's temporal
-functions (:data:`NOT_POINTWISE`, the occurrence phrases included) read other ticks through
-FRET's ``Left``/``Right`` of the scope (:func:`endpoints`) in conditions, responses and stop
-conditions, and in FRET's endpoint-free forms inside scope conditions, from the "meaning"
-column of section 6b; near the end of the trace the future-time ones read FRET's absorbing
-state after it (section 6's trace model). A requirement using one is fed the whole trace as
-one chunk (:func:`stream_unsupported` says why it cannot be chunked). Only uninterpreted
-functions (read from the column named by the printed call) and free-form sentences raise
-:class:`EvidenceUnsupported`. tests/monitors/test_evidence.py and test_evidence_functions.py
-check this against the generated monitors, FRET's formulas and an independent oracle;
-tests/monitors/test_interval_stream.py every split of a trace into chunks against one chunk.
-
-Memory: O(chunk + k + :data:`MAX_LISTED`), ``k`` the duration in ticks of ``within``/``for``/
-``after`` (the waiting triggers, 32 bytes each); nothing grows with the number of ticks, of
-intervals or of triggers (unless every trigger is recorded: :func:`every_trigger`). CPU:
-O(chunk) numpy work per chunk, never a Python loop over ticks or triggers.
+says *why*: scope intervals, trigger points (:func:`trigger_ticks`), each trigger's obligation
+(:data:`fretc.monitors.obligations.OBLIGATIONS`); the first violation (:class:`Violation`) is
+the earliest trigger whose obligation fails. Only uninterpreted functions and free-form
+sentences raise :class:`EvidenceUnsupported`. Memory O(chunk + k + :data:`MAX_LISTED`), CPU
+O(chunk) numpy work per chunk. The rule step by step, expressions and chunking:
+ARCHITECTURE.md ("FRET's interval semantics").
 """
 
 from __future__ import annotations

@@ -4,50 +4,12 @@ start time for any duration, in any scenario (:attr:`fretc.sim.scenarios.Scenari
 ``fault_*`` parameters of a space, ``bench/shield_scenarios.py --fault``).
 
 A fault is active at the sim times ``t`` with ``start <= t < start + duration`` (s from the
-start of the run, on the simulator's 1 ms grid: each bound rounded to the nearest ms); the
-LiDAR publishes at 100 ms multiples and the controller 50 ms after each, so a window holds
-the scans and proposals of those ticks. Outside every window the run is the run without the
-fault, message for message (the LiDAR keeps measuring during a scan fault, so its noise draws
-stay aligned; after the window the robot may of course be elsewhere).
-
-==================  ====================================================================
-kind                what the recorded messages show in the window
-==================  ====================================================================
-``silence``         no ``/scan`` (and no ``/tf`` map -> odom, which the localization
-                    publishes with each scan): the driver is silent (the ``lidar_dropout``
-                    scenario's dropout is this fault)
-``all_nan``         every range NaN (REP 117: an invalid measurement), the driver still
-                    publishing at its 10 Hz rate
-``sector_nan``      the ranges of the beams whose angle lies in ``sector`` NaN (angle of
-                    beam ``i`` = ``angle_min + i * angle_increment``, REP 103: 0 straight
-                    ahead along x of ``base_link``, counter-clockwise positive)
-``frozen``          the ranges of the last scan published before the window, republished
-                    with fresh ``header.stamp`` and log time (a hung driver)
-``stale_stamp``     fresh ranges, ``header.stamp`` held at the stamp of the window's first
-                    scan (the driver's clock stuck at the fault's start; log time advances)
-``near_returns``    ``near_count`` beams (drawn per scan within ``sector``, the whole scan
-                    without one) read ``near_range`` m (0.2 m: inside the footprint, where
-                    nothing can be): spurious returns of dust, rain or a dirty window
-``cmd_nan``         the controller proposes ``linear.x = NaN`` on ``/cmd_vel``
-``cmd_inf``         ... ``linear.x = +inf``
-``cmd_huge``        ... ``linear.x = 1e6`` m/s
-``safety_restart``  the Safety System's node crashes at the start and comes back at the
-                    end, in its initial state: with a generated shield (``--safety
-                    shield:DIR``) the shield hears and publishes nothing in the window and
-                    its state is reset; with the hand-written SIF the Gwendolen agent does
-                    the same and publishes its start-up ``false`` on ``/gwendolen_control``
-                    when it is back (the ``cmd_vel_interceptor``, a node of its own, keeps
-                    running)
-==================  ====================================================================
-
-The base executes a ``/cmd_vel_filtered`` that reaches it: ``+inf`` and ``1e6`` saturate at
-its speed limit, a NaN it cannot saturate and ignores, keeping its current speed
-(:meth:`fretc.sim.robot.ScoutMini.step`).
-
-Determinism: the beams of ``near_returns`` come from a generator of their own, seeded by the
-run's seed and the fault's place in the scenario's list (``SeedSequence(seed,
-spawn_key=(3, k))``, beside the three generators of the sensor noise, which it leaves
-untouched); every other kind draws nothing. Same seed, same faults: byte-identical MCAP.
+start of the run, on the simulator's 1 ms grid); outside every window the run is the run
+without the fault, message for message. Kinds: ``silence``, ``all_nan``, ``sector_nan``,
+``frozen``, ``stale_stamp``, ``near_returns``, ``cmd_nan``, ``cmd_inf``, ``cmd_huge``,
+``safety_restart``; what each shows in the recorded messages, and how the run stays
+deterministic (same seed, same faults: byte-identical MCAP): ARCHITECTURE.md ("The
+simulator's faults").
 """
 
 from __future__ import annotations
