@@ -16,35 +16,10 @@ the same document. Shape (schema ``fretc-audit/1``; keys sorted, two-space inden
       "statistics": [ RequirementStatistics.to_json() ... ]  # only with several logs or a
     }                                                         # probability requirement
 
-``statistics`` (:mod:`fretc.audit.fleet.statistics`): per requirement the runs of each verdict, the
-estimate of P(satisfied), its Clopper-Pearson ``interval`` at ``confidence``, and for a
-requirement ``with probability OP p`` its ``bound`` and statistical ``verdict`` (holds /
-fails / undecided). A probability requirement's exit code follows that verdict, never its
-per-run violations.
-
-A requirement read from a requirements tool (ReqIF, Doorstop, FRET's export) has an
-``origin`` (:class:`fretc.fretish.entry.Origin`), and each of its verdicts a ``tool_id``; a
-``.fret`` requirement has neither, so those documents are as before.
-
-Every time is given twice: ``*_ns`` - integer nanoseconds, ``*_s`` - seconds since the
-log's first message (``LogAudit.start_time_ns``), what a person reads. Each time says its
-clock: ``log_time_ns`` is always the log time of a real message (in a first violation, the
-message that decided the missed tick: where Foxglove seeks); a tick's own time is
-``tick_time_ns`` (first violation) or ``time_ns`` (other tick points), on the bindings' time
-base (``tick_time_base`` / ``LogAudit.time_base``: ``log`` or ``header``). Each
-requirement runs on its own clock (its variables' topics): ``ticks_evaluated``,
-``warmup_ticks``, ``first_tick_ns`` and ``last_tick_ns`` are per verdict; the log's own
-fields summarize them. Ticks are 0-based indexes of
-*evaluated* ticks (warm-up ticks are not numbered, see :mod:`fretc.signals`).
-
-Verdicts (``Verdict.verdict``): ``satisfied``; ``vacuous`` - satisfied because the scope was
-never entered or the trigger never fired (docs/guide/audits.md "Verdicts"); ``violated`` - FRET's
-finite-trace verdict is false; ``error`` - the requirement could not be audited on this log
-(``error`` says why: no binding, topic missing, no tick evaluated, ...); ``unknown`` - the
-log is damaged and the span read completely decides nothing: an obligation is still open where
-it ends (``unknown_reason`` says which; :mod:`fretc.audit.damage`). A verdict on a damaged log is
-computed on the span read completely (the ticks before ``damage_time_ns``) and has ``partial``
-true; a violation on it was decided before the damage.
+Every time is given twice: ``*_ns`` integer nanoseconds and ``*_s`` seconds since the log's
+first message. Verdicts: ``satisfied``, ``vacuous``, ``violated``, ``error``, ``unknown``
+(docs/guide/audits.md "Verdicts"). The statistics, origins, clocks of each time and the
+verdicts in full: ARCHITECTURE.md ("The audit's verdicts and JSON").
 """
 
 from __future__ import annotations
