@@ -177,14 +177,9 @@ def test_threads_putting_in_any_interleaving_reach_the_queue_in_log_time_order()
     assert got == sorted(t for r in plan.values() for t in r)
 
 
-def test_the_dds_client_releases_at_the_watermark(tmp_path):
-    """Two Cyclone DDS writers (fretc's replay server, in this process) of two topics, read by
-    the DDS client with a hold of an hour: the messages reach the queue in log-time order by
-    the watermark alone (each sample's publication handle names one of the readers' matched
-    writers); once one topic's publisher left, the other's last message goes too."""
-    import queue
-    import struct
-
+def _dds_server(tmp_path):
+    """(the DDS client class, fretc's DDS replay server on a fresh loopback domain, its URL,
+    the Cyclone DDS configuration file); a skip without cyclonedds."""
     import pytest
 
     pytest.importorskip("cyclonedds", reason="cyclonedds (Cyclone DDS) is not installed: "
@@ -196,7 +191,20 @@ def test_the_dds_client_releases_at_the_watermark(tmp_path):
     xml = tmp_path / "loopback.xml"
     xml.write_text(LOOPBACK_XML, encoding="utf-8")
     url = f"dds://{fresh_domain()}"
-    server = DdsServer(url, str(xml))
+    return DdsClient, DdsServer(url, str(xml)), url, xml
+
+
+def test_the_dds_client_releases_at_the_watermark(tmp_path):
+    """Two Cyclone DDS writers (fretc's replay server, in this process) of two topics, read by
+    the DDS client with a hold of an hour: the messages reach the queue in log-time order by
+    the watermark alone (each sample's publication handle names one of the readers' matched
+    writers); once one topic's publisher left, the other's last message goes too."""
+    import queue
+    import struct
+
+    import pytest
+
+    DdsClient, server, url, xml = _dds_server(tmp_path)
     for t in ("/a", "/b"):
         server.channel(t, "cdr", "std_msgs/msg/Float64", "ros2msg", b"float64 data")
     q = EventQueue()
@@ -248,18 +256,7 @@ def test_the_dds_client_reading_a_latched_topic_has_no_watermark(tmp_path):
     import struct
     import time
 
-    import pytest
-
-    pytest.importorskip("cyclonedds", reason="cyclonedds (Cyclone DDS) is not installed: "
-                        "pip install 'fretc[watch]'")
-    from fretc.live.dds.client import DdsClient
-    from fretc.live.dds.serve import DdsServer
-    from fretc.live.dds.idl_types import LOOPBACK_XML
-
-    xml = tmp_path / "loopback.xml"
-    xml.write_text(LOOPBACK_XML, encoding="utf-8")
-    url = f"dds://{fresh_domain()}"
-    server = DdsServer(url, str(xml))
+    DdsClient, server, url, xml = _dds_server(tmp_path)
     topics = ("/a", "/tf_static")
     for t in topics:
         server.channel(t, "cdr", "std_msgs/msg/Float64", "ros2msg", b"float64 data")
