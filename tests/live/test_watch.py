@@ -186,14 +186,15 @@ def _run_synthetic(plan, server, publish, wait=0.5, last=None):
     return w, la
 
 
-BINDINGS = """[tick]
+#: the bindings of /a and /b (tests/live/test_watch_run_end.py too)
+AB_BINDINGS = """[tick]
 period = "100 ms"
 time = "log"
 [variables]
 a_ok = "/a.data > 0"
 b_ok = "/b.data > 0"
-ghost_ok = "/ghost.data > 0"
 """
+BINDINGS = AB_BINDINGS + 'ghost_ok = "/ghost.data > 0"\n'
 FRET = """@tick_period 100 ms
 RA: the robot shall always satisfy a_ok
 RB: the robot shall always satisfy b_ok

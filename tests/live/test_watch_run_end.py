@@ -28,19 +28,14 @@ from fretc.monitors.interval import Evidence, Violation  # noqa: E402
 from fretc.live.websocket.serve import FoxgloveServer  # noqa: E402
 from fretc.live.watch import UNADVERTISED, Watch, WatchOptions, split_pending  # noqa: E402
 from fretc.audit.verdict import exit_code  # noqa: E402
+from test_watch import AB_BINDINGS  # noqa: E402
 
 pytestmark = pytest.mark.watch
 
 S = 1_000_000_000
 T0 = 1_700_000_000 * S
 FLOAT64 = ("std_msgs/msg/Float64", "ros2msg", b"float64 data")
-BINDINGS = """[tick]
-period = "100 ms"
-time = "log"
-[variables]
-a_ok = "/a.data > 0"
-b_ok = "/b.data > 0"
-"""
+BINDINGS = AB_BINDINGS
 FRET = """@tick_period 100 ms
 RA: the robot shall always satisfy a_ok
 RB: the robot shall always satisfy b_ok

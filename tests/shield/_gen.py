@@ -165,3 +165,22 @@ def unscoped_sets(draw, conditions: list[str], timings: list[str], responses: li
                      f"{draw(st.sampled_from(timings))}satisfy "
                      f"{draw(st.sampled_from(responses))}")
     return "\n".join(lines) + "\n"
+
+
+def shield_or_assume(text: str, inputs: list[str], outputs: list[str]):
+    """(compiled requirements, shield) of the .fret ``text``; a set the shield refuses is
+    rejected as a hypothesis example (``assume(False)``)."""
+    import tempfile
+
+    from hypothesis import assume
+
+    from fretc.shield.plan import ShieldError
+
+    with tempfile.TemporaryDirectory() as tmp:
+        compiled = compile_text(text, Path(tmp))
+        try:
+            shield = build_shield(compiled, inputs, outputs, fork=False)
+        except ShieldError:
+            assume(False)
+            raise
+    return compiled, shield

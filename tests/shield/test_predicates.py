@@ -19,7 +19,7 @@ import tempfile
 from pathlib import Path
 
 import pytest
-from hypothesis import HealthCheck, assume, given, settings
+from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from fretc.compiler import ir
@@ -32,7 +32,7 @@ from fretc.shield.prove import prove_shield
 from fretc.shield.runtime import ShieldRuntime, term_value
 
 from _c_monitors import build, needs_cc, write
-from _gen import atoms_of, compile_text, safe, verdicts, unscoped_sets
+from _gen import atoms_of, compile_text, safe, shield_or_assume, verdicts, unscoped_sets
 
 INPUTS = ["a", "b"]
 OUTPUTS = ["x", "p", "q", "r"]
@@ -63,13 +63,7 @@ def runs(draw, length: int = 30) -> list[tuple[dict, dict]]:
 
 
 def _shield(text: str):
-    with tempfile.TemporaryDirectory() as tmp:
-        compiled = compile_text(text, Path(tmp))
-        try:
-            shield = build_shield(compiled, INPUTS, OUTPUTS, fork=False)
-        except ShieldError:
-            assume(False)
-    return compiled, shield
+    return shield_or_assume(text, INPUTS, OUTPUTS)
 
 
 def _pred(text: str):
