@@ -1,46 +1,15 @@
 """CSV traces judged while they are read: each requirement's verdict and evidence from
 streams fed a chunk of rows at a time, in memory that does not grow with the trace.
 
-The whole-trace judge (:func:`fretc.monitors.judge.judge`) takes the columns of every tick
-at once: a trace of 10^7 rows held its columns (39 bytes a row for the Safe-ROS set) and the
-judge's arrays over every tick. A CSV trace audited without bindings is instead read once
-with a sink (:class:`fretc.logs.CsvSource`'s ``sink``): each chunk of rows goes, as it is
-read, to three streams per requirement, each the exact counterpart of one part of the
-judge, and nothing of the chunk is kept after it:
-
-* FRET's interval semantics: the verdict, the vacuity, the counts and the violations
-  (:class:`fretc.monitors.interval.IntervalStream`, equal to
-  :func:`fretc.monitors.interval.evaluate_requirement` over the whole trace);
-* the pt formula's robustness: its value, tick and the margin's points
-  (:class:`fretc.monitors.robustness.RobustnessStream`, equal to
-  :func:`fretc.monitors.robustness.robustness`);
-* the LTL3 verdict (:class:`fretc.monitors.judge.Ltl3Stream`, equal to
-  :func:`fretc.monitors.judge.ltl3_verdict`).
-
-The verdict is then set by the same code as the whole-trace audit's
-(:func:`fretc.audit.finalize.judged`). The values shown around a violation are read again
-from the file, up to the last tick shown (:func:`values_around`), only for a violated
-requirement. The audit JSON is the same byte for byte as the whole-trace judge's
-(``tests/audit/test_streamed.py``, on every CSV trace the tests have and on random ones).
-
-A requirement is judged whole instead - its columns kept, as for every other log - where a
-stream cannot take it (:func:`unstreamed_reason`: a FRET temporal function, which reads
-other ticks through the scope's ``Left``/``Right``; a probability bound, whose triggers are
-trials; ``--coverage``; an automaton too large for tables) or where the trace leaves some of
-its ticks unknown, which the three-valued judge decides: an ``unknown`` cell in a column it
-reads, a ``gap`` row; and at a ``cut`` row, where its verdict at the cut may read an
-obligation still open there (:func:`decided_at_cut`). Those are known only once read, so
-the file is then read a second time, keeping those requirements' columns (:class:`fretc.audit.log` does both). A
-requirement whose comparisons read NaN (:data:`NAN_REASON`) or that reads ``unknown`` cells
-(:data:`UNKNOWN_CELLS`), on a trace without a ``gap`` row (:data:`GAP_ROW`), is instead
-judged in three-valued semantics as the file is read again
-(:mod:`fretc.audit.streamed_three`, in memory that does not grow with the trace either), and only where those streams cannot take it are its columns kept. Every read of one audit (the second one, and the values
-read again around a violation) stops at the bytes the first one read
-(:attr:`fretc.logs.CsvSource.extent`, the file's size when first opened): a file still being
-written is judged over the same rows for every requirement. Memory: a chunk of rows, the streams' state
-(a bounded window's last ticks, at most :data:`fretc.monitors.interval.MAX_LISTED` pending
-triggers listed per group, :data:`fretc.audit.verdict.MARGIN_POINTS` margin points) per
-requirement.
+A CSV trace audited without bindings is read once with a sink (:class:`fretc.logs.CsvSource`'s
+``sink``): each chunk of rows goes to three streams per requirement (FRET's interval
+semantics, the pt formula's robustness, the LTL3 verdict), each the exact counterpart of one
+part of the whole-trace judge, and the verdict is set by the same code as the whole-trace
+audit's (:func:`fretc.audit.finalize.judged`): the audit JSON is the same byte for byte
+(``tests/audit/test_streamed.py``). What is judged whole or three-valued instead
+(:func:`unstreamed_reason`, :func:`decided_at_cut`, :data:`NAN_REASON`,
+:data:`UNKNOWN_CELLS`, :data:`GAP_ROW`), the reads again and the memory: ARCHITECTURE.md
+("CSV traces, streamed").
 """
 
 from __future__ import annotations

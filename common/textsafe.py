@@ -2,50 +2,15 @@
 
 Requirement ids, texts, file names, topic names and binding expressions come from files a
 user did not necessarily write (a FRET JSON export, a log's channel records). Every output
-shows them so that they cannot change the output's structure or the reader's screen:
-
-* :func:`visible` - control characters (Unicode category Cc: C0, DEL, C1), format
-  characters (Cf: the bidirectional overrides and isolates U+202A-U+202E, U+2066-U+2069, the
-  marks U+200E/U+200F, zero-width characters), line and paragraph separators (Zl, Zp),
-  lone surrogates (Cs) and the noncharacters U+FFFE/U+FFFF are written as Python-style
-  escapes (``\\x1b``, ``\\u202e``), visible and inert. The base of every other function.
-* :func:`terminal_text` - for the terminal: :func:`visible`, newlines included (an
-  ``ESC[2J`` in an id is printed as ``\\x1b[2J``, not obeyed; a U+202E cannot reorder the
-  line; a newline in a frame id cannot start a forged line of a CI log).
-* :func:`xml_text` - for XML 1.0 (JUnit, SVG, XHTML): :func:`visible` (XML 1.0, section 2.2,
-  allows no C0 character but tab, newline and carriage return; a NUL makes the document
-  unparseable). Markup characters are escaped by the XML writer afterwards.
-* :func:`md_code` - a Markdown code span that the text cannot close early: the fence is one
-  backtick longer than the longest backtick run in the text, padded with spaces (CommonMark
-  0.30, "Code spans"); ``|`` escaped for GFM tables.
-* :func:`one_line` - a ``//`` comment line of a ``.psl`` file: :func:`visible` with runs of
-  white space folded into one space.
-
-Generated code embeds ids, texts and names too, and there the text must not become code
-(hostile round 9, J1: a requirement id holding a line break, or Java's six characters ``\\u000a``,
-written raw into a ``//`` comment of a generated Java class ran as code when the class
-loaded). One function per target language, used everywhere that target embeds data:
-
-* :func:`java_string` and :func:`java_comment` - Java source (the Gwendolen form's
-  ``N_shield.java``, ``N_env.java``): a string literal whose value is the text, and a ``//``
-  comment line, both in ASCII with no ``\\u`` that Java's compiler would translate (JLS 17,
-  section 3.3: every ``\\uXXXX`` of the source, comments included, is translated before
-  lexing; so ``\\u000a`` in a comment is a line break, ``\\u0022`` in a literal a quote).
-* :func:`c_comment` - a C ``/* */`` comment (the C monitors' and the shield's C form; their
-  string literals are :func:`fretc.compiler.c_step.c_string`'s).
-* :func:`python_doc` - the text of a Python ``\"\"\"`` docstring (the Python shield's), which
-  reads back as the text.
-* :func:`properties_key`, :func:`properties_value` and :func:`properties_comment` - a Java
-  properties file (JPF's ``.jpf`` and site files, AIL's ``.ail``): ``java.util.Properties``'
-  own escapes (``Properties.store``), so a trailing ``\\`` continues no line and ``=``, ``:``,
-  ``#``, ``!``, leading spaces and ``\\u`` escapes are data.
-* :func:`gwendolen_comment` - a ``//`` comment line of a Gwendolen agent (``.gwen``): one
-  line, :func:`one_line`.
-* :func:`xml_content` - text in an XML element written by hand (the ROS 2 package's
-  ``package.xml``): :func:`xml_text` on one line, then ``&``, ``<``, ``>`` as entities.
-
-Python literals are ``repr`` (a valid literal of the same value for every string); the ROS 2
-node embeds names only so (``| py`` in ``shield_node.py.j2``).
+shows them so that they cannot change the output's structure or the reader's screen
+(:func:`visible`, the base of every other function: control, format and separator
+characters written as Python-style escapes; :func:`terminal_text`, :func:`xml_text`,
+:func:`md_code`, :func:`one_line`), and generated code embeds them so that the text cannot
+become code: one function per target language (:func:`java_string`, :func:`java_comment`,
+:func:`c_comment`, :func:`python_doc`, :func:`properties_key`, :func:`properties_value`,
+:func:`properties_comment`, :func:`gwendolen_comment`, :func:`xml_content`). Each function's
+rule and its source (Unicode categories, XML 1.0, CommonMark, JLS 17 section 3.3,
+``java.util.Properties``): ARCHITECTURE.md ("Text made safe").
 """
 
 from __future__ import annotations

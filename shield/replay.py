@@ -4,44 +4,12 @@ System would have done on the robot's real runs.
 The shield is a folder written by ``fretc shield --emit python -b BINDINGS -o DIR`` (its
 ``*_shield.py`` and the binding file it was built with: :func:`load_folder`). Over one
 recording (MCAP, ROS 1 bag, rosbag2 folder: what ``fretc audit`` reads, through the same
-reader, :func:`fretc.logs.open_log`, and the same bindings), :func:`replay_log`:
-
-* reads, in log-time order, the messages of the topics the inputs' bindings read and of the
-  proposal topics (``[shield] proposals``: corrected topic -> the topic the controller
-  proposes on), and hands each to the shield between messages
-  (:class:`fretc.shield.messages.MessageShield`: inputs sampled and held, the latest
-  proposal of each topic);
-* steps the shield once per tick of the requirements, on the clock the audit judges:
-  the bindings' fixed period on its multiples of log time (``docs/guide/ticks.md``, "The
-  tick grid", :func:`fretc.signals.bindings.spec.grid_start`) from the first of those
-  messages to the log's end (a topic silent to the end is stale there, as the audit reads
-  ``age()``), or one tick per message of the bindings' tick topic; a tick at ``t`` hears
-  every message of log time ``t`` or earlier (sample and hold, as the audit);
-* writes each tick's messages (the corrected outputs, one per output topic) at the tick's
-  log time, serialized as ROS 2 CDR with ``rosbags`` (the types of ``[shield] types`` or
-  ``[types]``, else the recorded type of the topic or of its proposal topic), and the
-  recorded messages as they were (:mod:`fretc.shield.replay_records`), into one MCAP file;
-* counts, per enforced requirement, the ticks at which its machine overrode the proposal
-  (the requirements :attr:`fretc.shield.runtime.Decision.reasons` names) with the first
-  and last log time; the overrides for a proposal that is no message the bindings give;
-  the ticks with an input that could not be read (before the first scan, a NaN: the
-  shield decided for every value it could have had, :mod:`fretc.shield.runtime`), a
-  proposal that could not be read (replaced), ticks with nothing published (no fallback),
-  and the assumptions of the environment that broke.
-
-A damaged recording (../shared/DESIGN.md, "Damage is a gap"; a cut, a chunk or record that
-does not read, a rosbag2 storage that ends early) is replayed over its intact span, the log
-times before the damage as the audit's reader finds it (:attr:`fretc.logs.LogSource.
-intact_end`, and where the recorded messages could be copied up to): the shielded recording
-holds the recorded messages and the shield's ticks of that span alone, and carries the
-damage (:func:`fretc.shield.replay_records.write_shielded`'s ``gaps``), so its audit is
-partial there and judges no tick past it. Where the damage is is known only once the
-recording was read, so a damaged recording is read twice: once to find it, once to write
-the span before it.
-
-The ROS 2 node the shield generates ticks on its ``[shield] tick`` topic and its timer
-instead, and meets each deadline early by its margin: a replay is the shield on the audit's
-clock, the one its proof is about.
+reader, :func:`fretc.logs.open_log`, and the same bindings), :func:`replay_log` steps the
+shield between messages (:class:`fretc.shield.messages.MessageShield`) once per tick of the
+requirements on the clock the audit judges, writes the corrected outputs (ROS 2 CDR) beside
+the recorded messages into one MCAP file, and counts the overrides, unreadable inputs and
+proposals and broken assumptions per requirement. A damaged recording is replayed over its
+intact span. Each step in full: ARCHITECTURE.md ("Shield replay").
 """
 
 from __future__ import annotations
