@@ -1,48 +1,13 @@
 """Requirement files: fretc's ``.fret`` text format and FRET's JSON exports.
 
-``.fret`` format (one requirement per line, line-oriented, UTF-8)::
-
-    # full-line comment
-    @tick_period 100 ms                     file directive: default tick period
-    R1: whenever too_close agilex_agent shall eventually satisfy stopped   # comment
-        rationale: the robot stops when an obstacle is too close
-        parent: SAFE-ROS-1
-        tick_period: 50 ms
-    R2: in landing mode upon wind > 20 the controller
-        shall within 2 seconds satisfy abort
-
-* ``ID: sentence`` starts a requirement at column 1. An id is ``[A-Za-z0-9_.-]+``; ids are
-  unique within a file. The sentence may be empty on the id line and start on the next
-  (indented) line.
-* ``#`` starts a comment, on its own line or after text, except inside a double-quoted
-  string (``"..."``, with ``\\"`` escapes), so quoted names and free-form requirements may
-  contain ``#``.
-* An indented line belongs to the requirement above it. ``rationale:``, ``parent:`` and
-  ``tick_period:`` lines (lower case) are attributes, each at most once; any other indented
-  line continues the sentence, and must come before the attributes. An indented line
-  after a ``rationale:`` line that is not an attribute continues the rationale (joined with
-  one space).
-* ``@tick_period <number> <unit>`` (at most once, anywhere in the file) is the tick period
-  of every requirement of the file that has no ``tick_period:`` attribute. Its grammar is
-  the one of every fretc duration (:mod:`fretc.common.units`: ns, us/µs, ms, s, min, h, their
-  long names such as ``milliseconds``, and ``Hz``). The period is stored in seconds as an
-  exact :class:`~fractions.Fraction` of the decimal text.
-* ``@inputs a, b`` and ``@outputs c`` (each at most once; names separated by commas or
-  spaces) declare which FRET variables the environment sets (sensor-derived) and which the
-  component sets, for ``fretc check``'s realizability check. A name in both is an error.
-* Blank lines are ignored.
-
-The sentence text handed to the parser keeps the file's geometry: continuation lines keep
-their line breaks and indentation (comments removed), so every span and error position is
-a file position.
-
-FRET exports (``.json``): a list of requirement objects, or an object whose
-``"requirements"`` member is that list (FRET's combined export; its ``"variables"`` are
-not read here). Per object: ``reqid`` (required), ``fulltext`` (required),
-``rationale``, ``parent_reqid``; all other members go to :attr:`RequirementEntry.extra`.
-Duplicate ``(project, reqid)`` pairs are an error. Positions point at the ``fulltext``
-string in the file (exact unless the string holds JSON escapes); error lines show the
-sentence itself.
+``.fret``: one requirement per line (``ID: sentence``, UTF-8), ``#`` comments, indented
+continuation lines and ``rationale:``/``parent:``/``tick_period:`` attributes, and the
+directives ``@tick_period`` (a duration of :mod:`fretc.common.units`, kept as an exact
+:class:`~fractions.Fraction` of seconds), ``@inputs`` and ``@outputs``. FRET exports
+(``.json``): a list of requirement objects (``reqid``, ``fulltext``, ``rationale``,
+``parent_reqid``; the rest in :attr:`RequirementEntry.extra`) or an object whose
+``"requirements"`` member is that list. Every span and error position is a file position.
+The format in full: ARCHITECTURE.md ("Requirement files").
 """
 
 from __future__ import annotations

@@ -1,50 +1,14 @@
 """FRET's boolean streams monotone in their own previous value, read as past-time formulas.
 
-A FRET Internal variable (or Mode) whose definition reads itself through ``pre`` is a stream
-with state (:mod:`fretc.fretish.fret_definitions`); most such boolean streams are latches:
-FRET's mode latch ``false -> (enter or (pre m and not exit))``, ``b -> b or pre latched``.
-Lustre's semantics (a node's equation computed at each instant; ``a -> b`` is ``a`` at the
-first instant, ``pre e`` the value of ``e`` one instant earlier, FRET's ``preBool(b, e)``
-being ``b`` at the first instant: :mod:`fretc.fretish.lustre`) makes such a stream ``s``,
-defined by ``D``, the sequence ``s_0 = D_0[pre s := b]``, ``s_t = D_t[pre s := s_(t-1)]``.
-
-When ``s`` occurs in ``D`` only as ``preBool(b, s)`` (``b`` a literal), each occurrence
-syntactically positive (under an even number of negations, never under ``xor``, ``<->``,
-``=``, ``!=``, a comparison, arithmetic, another ``pre`` or function, an ``ite``'s
-condition or the left of ``->``; an ``ite``'s branches are fine), ``D`` is a monotone
-function of its previous value ``x``: ``D = Q | (P & x)`` with ``Q = D[x := false]`` and
-``P = D[x := true]`` (Shannon's expansion of a monotone function). Then, for every trace,
-``s_t = Q_t | (P_t & s_(t-1))`` for ``t >= 1`` and ``s_0 = D0_0`` (``D0``: each occurrence
-replaced by its own first value), which is the recursion of the past-time *since*
-(pt-LTL as Havelund & Rosu, "Synthesizing monitors for safety properties", TACAS 2002, and
-FRET's pt formulas read it: ``(a S c)_t`` iff ``c_k`` at some ``k <= t`` and ``a_j`` at
-every ``j`` in ``(k, t]``, so ``(a S c)_t = c_t | (a_t & (a S c)_(t-1))``, false before
-the trace): ``s = P S psi`` with ``psi = Q | (FTP & D0)`` (``FTP`` the trace's first
-instant; ``Q`` implies ``D0`` by monotonicity, so ``psi`` is ``D0`` at the first instant
-and ``Q`` after; ``psi = Q`` when every first value is false). The mode latch is
-``(!FTP & (enter | !exit)) S (!FTP & enter)``; ``b -> b or pre latched`` is
-``(!FTP | b) S b``, FRET's ``once b``.
-
-:func:`since_expansion` builds that formula as the AST call :data:`SINCE` (``SINCE(P,
-psi)``), a name neither FRETish's grammar (a name starts with a letter) nor the Lustre
-reader (letters, digits and ``_``) produces, so no requirement or definition can write it;
-the compiler expands it to its IR since (:class:`fretc.compiler.expressions.Expander`: ``S``
-in pt, a derived ``past`` atom in ft, as FRET's other past-time functions) and prints it
-``(P S psi)`` (:func:`fretc.compiler.printers.expr_text`). A boolean stream that is not
-monotone in its previous value (a toggle ``false -> not pre t``: it counts modulo 2, no
-past-time formula of its inputs is it) and a numeric stream stay streams with state.
-
-A boolean stream that is not monotone but reads only booleans and comparisons of the tick's
-values (no ``pre`` of a number: a comparison is an atom, as the game reads every one) and
-itself only as ``preBool(b, name)`` is still a deterministic machine with one bit of
-state, its previous value ``x`` (pt monitors keep one bit per past operator: Havelund &
-Rosu): ``s_t = P_t`` when ``s_(t-1)``, else ``Q_t``, with ``P``, ``Q`` the definition with
-each occurrence ``true``, ``false`` after the first instant and its own ``b`` at it (so
-``s_0 = Q_0 = D_0[pre s := b]``, the previous value read as false there).
-:func:`stream_expansion` builds it as the AST call ``STREAM_PREFIX + name`` with arguments
-``(P, Q)`` (:func:`stream_name` reads the name back), for the analyses that ask for it
-(``definitions(..., bits=True)``: ``fretc check`` and ``fretc shield``); the compiler makes it
-the IR node ``stream`` (pt) or a derived ``past`` atom named by the stream (ft).
+A FRET Internal variable (or Mode) whose definition ``D`` reads itself only as
+``preBool(b, s)``, each occurrence syntactically positive, is monotone in its previous value:
+``s_t = Q_t | (P_t & s_(t-1))``, the recursion of the past-time *since* (Havelund & Rosu,
+TACAS 2002), so ``s = P S psi``: :func:`since_expansion` builds it as the AST call
+:data:`SINCE`. A boolean stream that is not monotone but reads only booleans and comparisons
+is one bit of state: :func:`stream_expansion` builds it as ``STREAM_PREFIX + name`` with
+arguments ``(P, Q)`` (:func:`stream_name` reads the name back). The derivation (Lustre's
+semantics, Shannon's expansion, the first instant) and what stays a stream with state:
+ARCHITECTURE.md ("FRET's streams as past-time formulas").
 """
 
 from __future__ import annotations
