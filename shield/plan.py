@@ -1,45 +1,14 @@
 """What ``fretc shield`` enforces: the requirements sorted into enforced, monitored and refused,
 the enforced ones into components, and the consistency of the outputs' atoms.
 
-* **Enforced**: a requirement reading an output whose ft_inf is a safety property monitored
-  by its FRET pt formula (:func:`fretc.check.safety_game.pt_monitors_ft_inf`) and whose atoms
-  the game takes (boolean variables, comparisons of one variable with a constant, and
-  comparisons of several variables as predicates kept consistent by z3,
-  :mod:`fretc.shield.predicates`).
-* **Monitored only**: a requirement over inputs only: no output can keep it (Safe-ROS's R5,
-  ``clearance > 0``, is the environment's); listed, not enforced.
-* **Refused** (input errors, exit 2, :class:`ShieldError`): not a safety property (an
-  ``eventually`` without a bound: "give a deadline"), an atom the game cannot take, a variable
-  declared neither input nor output.
-* **Assumptions** (``fretc shield --assume FILE``): requirements of the environment, what it
-  can do (Alshiekh et al., "Safe Reinforcement Learning via Shielding", AAAI 2018: the
-  shield's guarantee rests on an abstraction of the plant). Each must be a safety property
-  whose pt formula reads an output only at earlier ticks (under ``Y``: "whenever the robot
-  was commanded ..., at the next timepoint ..."), so that the controller can never be the one
-  to break it. They join the components whose variables they share, and a component's game
-  counts a requirement kept at every tick at which one of its assumptions has been broken:
-  the environment loses a play in which it breaks one (each requirement's pt formula ``R``
-  becomes ``R | !(H A1 & ... & H An)``). A requirement over inputs only is then enforced when
-  an assumption relates one of its variables to an output (Safe-ROS's R5, ``clearance > 0``:
-  the environment's assumptions say how the clearance answers the commands), else monitored.
-
-**Outputs bounded by the inputs** (a comparison of one output with a term over the inputs and
-constants, ``linear_velocity <= 0.5 * (front_dist - 0.3)``: :mod:`fretc.check.bounds`) are
-atoms of the controller, and which of their truth values numbers give at a tick is the
-environment's move: the order comparisons of their ends (inputs only) join the game's inputs,
-related to the other comparisons of the inputs by z3, and the controller's consistency says
-which truth values each order allows. Such an output may not be compared with ``=``/``!=``,
-with another output, share its message's field with another output, or take whole numbers
-(refused, with the reason).
-
-Components (as ``fretc check``'s realizability: requirements sharing a variable) are joined
-further when the bindings bind their outputs to one topic, and when the binding file names
-them one twist (``[shield] twists``: a linear and an angular speed scaled together, the path's
-curvature kept, as Nav2's collision monitor limits them): the shield corrects such outputs
-together. Their atoms' valuations that no single message gives (``forwarded_zero`` true with
-``stopped`` false: both read ``/cmd_vel_filtered``) are excluded from the controller's moves,
-found by inverting the bindings as ``fretc testgen --bindings`` does
-(:func:`fretc.testing.invert.solve`).
+Enforced: a safety requirement reading an output whose atoms the game takes; monitored
+only: one over inputs only; refused (input errors, exit 2, :class:`ShieldError`): not a
+safety property, an atom the game cannot take, a variable declared neither input nor output.
+Assumptions of the environment (``--assume``, Alshiekh et al., AAAI 2018) join the components
+whose variables they share. Outputs bounded by the inputs (:mod:`fretc.check.bounds`) are
+atoms of the controller. Components are joined further by shared topics and twists, and
+valuations no single message gives are excluded (:func:`fretc.testing.invert.solve`). Each
+rule in full: ARCHITECTURE.md ("What the shield enforces").
 """
 
 from __future__ import annotations

@@ -1,45 +1,13 @@
 """``fretc shield --prove``: the closed loop proved with Spot, independently of the game.
 
-The shield composed with *any* environment and *any* controller is a transition system:
-from a state ``s`` (the monitors' bits), for every input letter ``i`` the environment may
-give (``env_ok``: numbers consistent), the shield outputs some ``o`` with ``safe(s, i, o)``
-(every safe ``o`` is possible: the controller may propose it; an unsafe proposal is mapped
-to a safe one), and moves to ``next(s, i, o)``. :func:`prove_shield` builds that system
-explicitly from the emitted node tables (the data every form runs), as a Spot automaton over
-the atoms, and for each enforced requirement checks that its product with Spot's automaton
-of the requirement's negated ft_inf formula (FRET's infinite-trace semantics, translated by
-Spot, not by the game) is empty: no run of the closed loop violates it. It also checks that
-the shield never blocks: every reachable state has a safe output for every consistent input.
-A derived past atom of an ft_inf formula (FRET's ``occurred``, ``persisted``, ``preBool``, a
-latch's since, a stream's state bit) is given to Spot as its expansion over temporal testers
-(:mod:`fretc.check.past_testers`), so a run is a violation only where the atom's expansion
-makes it one; one no tester writes leaves the answer unknown, naming it.
-
-The explicit system has at most :data:`MAX_STATES` states and each requirement's bounds at
-most :data:`fretc.check.checker.SPOT_MAX_BOUND` ticks (Spot's translation grows
-exponentially with them); past either the answer is unknown, and says so.
-
-With assumptions of the environment (``fretc shield --assume``, :mod:`fretc.shield.plan`) a
-requirement is proved **under** them: the product is with ``A1 & ... & An & !R`` (each
-assumption's ft_inf), so only the runs of an environment that keeps every assumption count,
-and the report says so. A proof under assumptions is only worth the runs it covers, so two
-answers are never "holds" (a hostile finding: ``A1: environment shall always satisfy a & !a`` was
-"proved" without a word):
-
-* **vacuous** (every requirement of the machine): no run of the closed loop keeps the
-  assumptions (the product with ``A1 & ... & An`` is empty): nothing is proved;
-* **vacuous** (one requirement): no run of the closed loop that keeps the assumptions fires
-  its trigger (enters its scope and meets its condition, :func:`fretc.check.items.make_item`'s
-  ``trigger``, as ``fretc check``'s vacuity): it holds only because the assumptions exclude
-  every case it speaks of (``A5: always !a`` for ``whenever a ... immediately o``).
-
-Either is "NOT PROVED" (exit 1), with the reason.
-
-**Outputs bounded by the inputs** (:mod:`fretc.check.bounds`) are atoms the closed loop sets
-as the machine decides them; that a number gives the decided atoms at each tick is the
-runtime's part, which the proof assumes and states (``Proof.choice``, printed): the forms
-clamp the proposal between the decided comparisons' thresholds
-(:mod:`fretc.shield.runtime_bounds`) and report the ticks where no finite number meets them.
+:func:`prove_shield` builds the shield composed with any environment and any controller as
+an explicit Spot automaton over the atoms, from the emitted node tables, and for each
+enforced requirement checks that its product with Spot's automaton of the negated ft_inf
+formula is empty, and that the shield never blocks. Past :data:`MAX_STATES` states or
+:data:`fretc.check.checker.SPOT_MAX_BOUND` ticks the answer is unknown, and says so. Under
+assumptions (``--assume``) a requirement is proved under them, and a vacuous proof is "NOT
+PROVED" (exit 1). The construction, past atoms, assumptions and bounded outputs in full:
+ARCHITECTURE.md ("Proving the closed loop").
 """
 
 from __future__ import annotations

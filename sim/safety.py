@@ -1,47 +1,14 @@
 """The Safety System: the Gwendolen agent's SIF and the ``cmd_vel_interceptor``.
 
 SIF (Safe-ROS, FMAS 2025; property ``[] (B(agilex_agent,too_close) -> <> B(agilex_agent,
-stopped))``): on every ``/scan`` the agent computes the minimum *valid* range (finite, within
-``[range_min, range_max]``; ``-inf`` counts as ``range_min``; ``+inf``/NaN ignored, REP 117).
-Below ``threshold`` (0.9 m in Safe-ROS) it publishes ``true`` on ``/gwendolen_control``
-(std_msgs/Bool); once clear it publishes ``false``. It publishes on changes only (plus one
-``false`` at start-up).
-
-Recovery (our design; the paper leaves it open). Inspection point 3 is ~0.62 m from a wall,
-closer than the threshold, so a plain SIF would hold the robot there for ever. The agent is a
-state machine over three states:
-
-``ARMED``
-    stop not requested. ``min_range < threshold`` -> publish ``true``, go ``STOPPED``.
-``STOPPED``
-    stop requested. ``min_range >= threshold + hysteresis`` -> publish ``false``, ``ARMED``.
-    Otherwise, once the base has been at rest (odometry ``|v| < stopped_eps`` m/s and
-    ``|w| < stopped_eps`` rad/s) for ``hold`` s, and ``min_range >= release_floor``, the agent
-    *releases* the stop for a monitored move: publish ``false``, remember ``r0 = min_range``,
-    go ``MONITORED``. Below ``release_floor`` it never releases (a person must intervene).
-``MONITORED``
-    stop not requested, but the SRAS may only move slowly: if ``min_range < r0 - margin``
-    (each release buys at most ``margin`` = 5 cm of approach), or, after the range has been
-    back at or above ``threshold``, ``min_range < threshold`` again, or the odometry speed
-    exceeds ``slow_speed + speed_tolerance`` -> publish ``true``, ``STOPPED``.
-    ``min_range >= threshold + hysteresis`` -> ``ARMED`` (nothing published: it is already
-    ``false``).
-
-The release floor (0.45 m by default) keeps the LiDAR, which sits at the footprint centre, at
-least ``release_floor - margin`` = 0.40 m from anything while the SIF is in charge, so even the
-footprint corner (0.267 m from the centre) keeps >= 0.13 m of clearance, turning included.
-Every rising edge of ``too_close`` while the agent is not already requesting a stop leads to an
-immediate stop, so ``upon too_close ... within 1 second ... stopped`` holds.
-
-Fault injections: ``enabled=False`` (sif_disabled: the agent only publishes its start-up
-``false``); ``delay`` s (stop_delay: every decision reaches ``/gwendolen_control`` late). The
-agent has no fail-safe for stale scans: without a scan it keeps its last decision
-(lidar_dropout).
-
-cmd_vel_interceptor (Safe-ROS ``cmd_vel_interceptor_node.py``, property proved in Dafny: while
-``/gwendolen_control`` is true only zero velocity is forwarded): forwards each ``/cmd_vel`` to
-``/cmd_vel_filtered``, or a zero Twist while stop is requested; when a stop request arrives it
-publishes a zero Twist at once. ``faulty=True`` (interceptor_fault) forwards everything.
+stopped))``): on every ``/scan`` the agent computes the minimum *valid* range (REP 117) and
+publishes ``true`` on ``/gwendolen_control`` below ``threshold`` (0.9 m), ``false`` once clear,
+on changes only; a state machine (``ARMED``, ``STOPPED``, ``MONITORED``: our design of the
+recovery, which the paper leaves open) releases a stop for a slow monitored move above
+``release_floor``. The interceptor (Safe-ROS ``cmd_vel_interceptor_node.py``) forwards each
+``/cmd_vel`` to ``/cmd_vel_filtered``, or a zero Twist while a stop is requested. Fault
+injections: ``enabled=False``, ``delay``, ``faulty=True``. The states, the release floor's
+clearance and the faults in full: ARCHITECTURE.md ("The simulator's Safety System").
 """
 
 from __future__ import annotations
