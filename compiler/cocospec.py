@@ -1,45 +1,14 @@
 """CoCoSpec contracts for Kind 2 (``fretc FILE --emit cocospec``), as FRET's CoCoSpec export
 makes them.
 
-FRET (its Analysis Portal, "Export" with language CoCoSpec) writes one Lustre file per
-component, ``<component>Spec.lus``: a library of past-time operators as Lustre nodes, then
-the contract ``<component>Spec`` whose inputs and outputs are the component's Input and
-Output variables (types from the glossary: ``boolean`` -> ``bool``, integers -> ``int``,
-``single``/``double`` -> ``real``), its Internal variables as ``var NAME: TYPE = DEF;``, and
-one ``guarantee "ID" EXPR;`` per requirement (``assume`` when the id says ``assumption``),
-EXPR being the requirement's pt formula in Lustre. FRET writes DEF, the glossary's
-``assignment``, as it is; fretc writes it as it reads it, printed back from FRET's Lustre
-subset with every name renamed as in the signature, and leaves out (with the reason, the
-variable then an input) a definition outside the subset
-(:mod:`fretc.compiler.cocospec_definitions`): no text of the glossary reaches the file as
-code. ID is folded to one line with ``\\`` and ``"`` escaped; ids and texts in comments are
-one line with no ``*)``. fretc writes the same, from its pt formula
-IR (never from printed text), as a Kind 2 contract node (Kind 2's documentation, "Contracts":
-``contract NAME(INPUTS) returns (OUTPUTS); let ... tel``), which a node takes with
-``(*@contract import NAME(...) returns (...); *)``.
-
-The translation (FRET's names and argument orders, so a contract reads as FRET's):
-
-* ``! & | xor -> <->`` as ``not and or xor => =``; comparisons with ``<>`` for ``!=``;
-  ``+ - * /``, ``mod`` (integers only);
-* ``Y p`` as ``YtoPre(p)`` (false at the first tick), ``Z p`` as ``ZtoPre(p)`` (true there),
-  FRET's first timepoint as ``ZtoPre(false)``; ``H p``, ``O p``;
-* ``a S b`` as ``S(b, a)`` and ``a T b`` as ``T(b, a)`` (FRET's nodes take the event
-  first);
-* bounded ``O[l,h] p`` as ``OT(h, l, p)``, ``H[l,h] p`` as ``HT(h, l, p)`` (FRET's order:
-  the far end first); ``OT`` reads ``p`` delayed by ``l`` ticks through ``delay``, a node
-  that dispatches to one ``delayN`` per bound the file uses, as FRET's does;
-* ``absReal``, ``maxReal`` ... and ``preBool``/``preInt``/``preReal`` as FRET's library
-  nodes of those names.
-
-Kind 2 converts no type implicitly (its parser: ``real e`` and ``int e`` convert): a number
-prints as its context's type (``3.0`` beside a real), an integer term beside a real one is
-converted with ``real``, and ``/`` is the reals' division (FRET's; Lustre's ``div`` of
-integers is another). ``^`` (Lustre has no power), ``mod`` of reals, an integer function
-(``absInt``) of a real, uninterpreted functions, an if-then-else of numbers and a pt formula
-that needs the future are refused, the requirement left out with the reason. The library is fretc's own
-Lustre; each node's meaning is tested against fretc's reference evaluator
-(``tests/compiler/test_cocospec.py``).
+One Lustre file per component, ``<component>Spec.lus``: a library of past-time operators as
+Lustre nodes, then the contract ``<component>Spec`` (inputs and outputs the component's Input
+and Output variables, types from the glossary, Internal variables as ``var``, one
+``guarantee "ID" EXPR;`` per requirement, EXPR its pt formula in Lustre, from the IR, never
+from printed text). What Lustre cannot say (``^``, ``mod`` of reals, uninterpreted
+functions, the future) leaves the requirement out with the reason. The translation operator
+by operator and Kind 2's types: ARCHITECTURE.md ("CoCoSpec contracts"); each node's meaning
+is tested in ``tests/compiler/test_cocospec.py``.
 """
 
 from __future__ import annotations

@@ -3,43 +3,13 @@ to count as *exercised*, derived from the requirement's parsed fields (scope, co
 timing, response) and read by the audit (``fretc audit --coverage``) and the test generator
 (``fretc testgen``).
 
-Every obligation but the threshold ones is a **verdict difference**: the obligation is met on
-a trace when FRET's finite-trace verdict of the requirement (satisfied, vacuous, violated)
-differs from the verdict of a *variant* of it on that same trace, the variant changing one
-part and nothing else. This is the trace-level reading of unique-cause coverage (MC/DC's
-independence; Whalen, Rajan, Heimdahl, Miller, "Coverage metrics for requirements-based
-testing", ISSTA 2006, whose unique-first-cause obligations ask that an atom's value, the
-others unchanged, decide the formula): instead of rewriting the ft formula into one
-obligation formula per atom, the atom is replaced by a constant and the verdicts compared,
-which carries over unchanged to FRET's past-time and bounded operators, scopes and
-deadlines. The obligations:
-
-* ``<field>:<atom>+`` (every atom of the scope's mode, the condition, the stop condition and
-  the response): the atom's own effect when true: with the atom false throughout the field
-  (everything else unchanged) the verdict would differ, so the atom was true somewhere and
-  that decided the verdict; ``<field>:<atom>-`` the same with the atom false and replaced
-  by true (FRET's FLIP coverage, one obligation per atomic proposition and value: Katis,
-  Mavridou, Pressburger, NFM 2025).
-* ``trigger``: the condition made false throughout would make the verdict vacuous, so a
-  trigger fired in scope and its obligation was judged.
-* ``trigger-persists`` (a condition): the condition read as the other of FRET's condition
-  kinds (``upon``/``when``/``if``, a trigger at each rising edge, against ``whenever``, a
-  trigger at every tick the condition holds) would change the verdict: the condition stays
-  true (or comes back) after its first edge and the response is judged again, or not.
-* ``scope-entered``: the scope's mode set so that no scope interval exists would change the
-  verdict; ``scope-left``: the scope widened past the mode's end (``in M`` to ``after M``,
-  ``before M`` and ``not in M`` to globally) would change it, so the trace left the scope
-  and its end decided the verdict.
-* ``deadline-reached`` (``within/for/after n``): with ``n-1`` ticks the verdict would
-  differ (the trace decides the requirement at the deadline's last tick);
-  ``deadline-missed``: with ``n+1`` ticks it would differ (one tick past the deadline
-  decides it). These two are the boundary tests of the deadline.
-* ``timing:<kind>``: the timing replaced by another of FRET's timings (``immediately``,
-  ``next``, ``eventually``, ``always``, ``never``, ``within/for/after n``) would change the
-  verdict: the trace shows when the response must come (the timing field's own effect).
-* ``<field>:<comparison>:true`` / ``:false`` for a numeric variable compared with a number
-  (``distance < 0.9``): the comparison seen on that side of its threshold at some tick,
-  with the closest margin seen (:func:`fretc.monitors.coverage.exercised`).
+Every obligation but the threshold ones is a **verdict difference**: met on a trace when
+FRET's finite-trace verdict of the requirement differs from that of a *variant* changing one
+part and nothing else (unique-cause coverage, Whalen et al., ISSTA 2006; FRET's FLIP
+coverage, Katis et al., NFM 2025). The obligations (``<field>:<atom>+``/``-``, ``trigger``,
+``trigger-persists``, ``scope-entered``, ``scope-left``, ``deadline-reached``,
+``deadline-missed``, ``timing:<kind>``, ``<field>:<comparison>:true``/``:false``) in full:
+ARCHITECTURE.md ("Coverage obligations").
 """
 
 from __future__ import annotations

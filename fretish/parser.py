@@ -2,44 +2,12 @@
 
 The grammar is ``grammar.lark`` (Lark, LALR(1), contextual lexer); its header states the
 phrasings and the expression precedence, one rule per level. :class:`_Builder` is Lark's
-transformer, applied while parsing (no intermediate parse tree): one method per rule or
-alias, each given the rule's children (AST nodes and the named tokens, ``lark.Token``).
-Lark's tables are kept in fretc's cache folder, the sealed entry ``lark/fretish-KEY.lark``
-(:mod:`fretc.common.lark_tables`: Lark's serialized tables as plain data, never a pickle;
-KEY names the grammar text, the options and the Lark and Python versions); with the disk
-cache off the tables are built in each process (about 0.4 s of CPU).
-
-Readings fixed here (FRET 3.x ``Requirement.g4`` and its semantic listener, restated;
-``../shared/fretish/README.md`` sections 1-5 and 7):
-
-* Scope: ``in/during/when in/if in M`` and ``while C`` are ``in``; ``when not in/if not
-  in/unless in/except in/except during/except when in/except if in M`` and ``except while
-  C`` are ``notin``; ``only`` + an ``in`` phrase is ``onlyIn``; ``[only] after/before`` take
-  a mode (``mode M``/``M mode``) or a condition (a bare name is a condition: ``Var`` either
-  way). ``Scope.mode`` is the ``Var`` or the expression.
-* Condition: parts ``[and|or] qualifier P [is true|is false]`` with optional commas; a
-  part negates P when exactly one of "qualifier is unless" and "is false" holds (so
-  ``unless P is false`` is P, as in FRET). A later part without ``and``/``or`` is a
-  conjunction and records ``connective="and"``; the first part has ``connective=None``.
-  Parts fold left (``and`` -> ``&``, ``or`` -> ``|``); ``holding`` iff every part is
-  ``whenever``.
-* ``is true``/``is false``, ``true``/``false`` in any letter case (FRET defect 4 fixed);
-  ``~`` is negation (defect 1); ``if A then B`` is ``A -> B`` everywhere (defect 2);
-  ``preBool`` with a numeric initial value is an error (defect 3).
-* A minus sign written against a number literal, in operand position, is part of the
-  literal, as in FRET's lexer: ``-3.0e2`` is ``NumLit("-3.0e2")`` and ``-3 ^ 2`` is
-  ``(-3) ^ 2``; ``- 3``, ``-(3)`` and ``-x`` are ``Unary("-")``, which binds looser than
-  ``^`` (``-x ^ 2`` is ``-(x ^ 2)``). After an operand, ``-`` is subtraction (``x -3`` is
-  ``x - 3``; FRET's lexer would read a number ``-3`` there and reject the sentence).
-* "!" where only an arithmetic operand or a comparison side may stand (``x = !y``,
-  ``x ^ !y``) and chained comparisons (``a < b < c``) are errors, reported when the
-  expression that holds them ends (the leftmost first); ``-!y`` is an error at once.
-* Spans: ``line``/``column`` in file coordinates (``parse(..., line=, column=)`` give where
-  the text starts), ``start``/``end`` 0-based offsets into the text. A ``Scope``,
-  ``Condition``, ``Timing`` or ``Probability`` span covers its words without the optional
-  commas; ``Requirement.component_span`` covers ``[the] name`` and ``response_span``
-  covers ``satisfy R`` (FRET's text ranges). A parenthesized expression's span includes
-  its parentheses.
+transformer, applied while parsing (no intermediate parse tree). Lark's tables are the sealed
+cache entry ``lark/fretish-KEY.lark`` (:mod:`fretc.common.lark_tables`). The readings fixed
+here follow FRET 3.x ``Requirement.g4`` and its semantic listener (``../shared/fretish/
+README.md`` sections 1-5 and 7); spans are file coordinates (``line``/``column``) and 0-based
+offsets (``start``/``end``). Each reading (scopes, conditions, FRET's defects fixed, minus
+signs, errors, spans): ARCHITECTURE.md ("Reading a FRETish sentence").
 """
 
 from __future__ import annotations

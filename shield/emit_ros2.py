@@ -2,43 +2,14 @@
 node, the Safety System of Safe-ROS generated: the SIF's stop request and the
 ``cmd_vel_interceptor``'s forwarding, corrected by the shield.
 
-The package ``<name>_shield_ros2`` (build it with ``colcon build``, or run ``python -m
-<name>_shield_ros2`` in an environment with rclpy and fretc): ``package.xml``, ``setup.py``,
-``setup.cfg``, ``resource/``, ``launch/<name>_shield.launch.py``, and the module holding the
-generated Python shield (:mod:`fretc.shield.emit_python`), the binding file and the node.
-
-The node (:func:`node_source`):
-
-* subscribes every topic an input binding reads and every proposal topic (``[shield]
-  proposals`` of the binding file: Safe-ROS ``/cmd_vel`` for ``/cmd_vel_filtered``), best
-  effort (so reliable and best-effort publishers both match), messages held with their
-  arrival time (the node's clock: the log time of a recording made beside it);
-* ticks on each message of the ``[shield] tick`` topic (Safe-ROS: ``/scan``, the LiDAR's
-  100 ms: the answer follows the scan at once), and on its timer at the requirements' period
-  when that topic falls silent for more than a period and a half (so a stale input is still
-  judged); without a tick topic, on the timer alone; at most one tick per half period, and
-  the ticks a late timer missed are stepped at their own times first (the shield counts its
-  deadlines in ticks: one tick per period of time keeps them deadlines in time);
-* each tick publishes the corrected outputs (:class:`fretc.shield.messages.MessageShield`:
-  the proposal unchanged, or the fields the bindings' inversion gives the corrected values)
-  and ``/diagnostics`` (``diagnostic_msgs/DiagnosticArray``: level OK, WARN with the reasons
-  and the changed outputs on an override, ERROR when an input or a proposal cannot be read
-  or an assumption of the environment broke: the fallback's messages are then published).
-
-Message types come from the binding file's ``[shield] types`` (or ``[types]``) table (topic ->
-``pkg/msg/Type``).
-
-**On time on the bus by construction.** Another node sees the node's answers later than the
-shield's ticks: a reader (a recorder, the audit's ticks, a watch) samples at another phase,
-so an answer may look one tick late, and the node itself takes time from a message's
-receipt to its corrected messages published. So the node's shield meets every ``within``
-deadline :func:`node_margin` ticks early, from the tick period, the sampling phase (one
-period) and the node's latency budget (``[shield] latency_budget`` of the binding file,
-default :data:`LATENCY_BUDGET`): with a 100 ms tick and 20 ms, 2 ticks (R2 within 8 ticks,
-R6 within 3). The node measures its latency (receipt to published, every tick) and reports
-it on ``/diagnostics`` (``latency_ms``, ``latency_max_ms``, ``latency_budget_ms``,
-``margin_ticks``), with WARN when a tick took longer than the budget: the margin no longer
-covers it. ``fretc shield --prove`` states this timing and proves the node's shield too.
+The package ``<name>_shield_ros2`` (``colcon build``, or ``python -m <name>_shield_ros2``
+with rclpy and fretc) holds the generated Python shield, the binding file and the node
+(:func:`node_source`), which subscribes the input and proposal topics, ticks on the
+``[shield] tick`` topic and its timer, and publishes the corrected outputs
+(:class:`fretc.shield.messages.MessageShield`) and ``/diagnostics``; it meets every
+``within`` deadline :func:`node_margin` ticks early (``[shield] latency_budget``, default
+:data:`LATENCY_BUDGET`). The node's subscriptions, ticks, messages and timing in full:
+ARCHITECTURE.md ("The ROS 2 node").
 """
 
 from __future__ import annotations

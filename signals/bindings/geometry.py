@@ -2,43 +2,13 @@
 frame, counted inside a polygon or swept by the footprint moving along a commanded arc, as
 Nav2's collision monitor reads them (docs/bindings.md, "Geometry").
 
-Values (never a variable's value: only arguments of the functions that use them):
-
-* **points** (:class:`Points`): ``scan_points(/scan)`` the valid returns of a
-  ``sensor_msgs/LaserScan`` (beam ``i`` at angle ``angle_min + i * angle_increment``, REP 103:
-  x ahead, y left, counter-clockwise; REP 117: NaN, +inf and returns outside ``[range_min,
-  range_max]`` are no point, -inf a detection at ``range_min``); ``cloud_points(/cloud)`` the
-  ``x``, ``y``, ``z`` of a ``sensor_msgs/PointCloud2`` (a point with a NaN or infinite
-  coordinate is no point, as a non-dense cloud marks a missing one), optionally kept between
-  two heights (Nav2's ``min_height``/``max_height``). With a frame (``scan_points(/scan,
-  "base_link")``) the points are moved from the message's ``header.frame_id`` into it through
-  TF (REP 105, :class:`fretc.signals.bindings.frames.TfBuffer`, sample and hold at the tick);
-  without, they stay in the sensor's own frame. A sensor *blind* at a tick (no point, and an
-  invalid measurement) makes every function of its points NaN (unknown): a covered LiDAR is no
-  clear path, as ``min(/scan.ranges)`` reads it.
-* **polygons** (:class:`Polygon`): ``polygon(x1, y1, x2, y2, x3, y3, ...)`` a fixed one (m,
-  in the points' frame), ``polygon(/footprint)`` the ``geometry_msgs/PolygonStamped`` of a
-  topic (Nav2's published footprint), moved from its ``header.frame_id`` into the points'
-  frame through TF, ``polygon(/msg.polygon)`` a ``geometry_msgs/Polygon`` field (in the points'
-  frame). At least three vertices; the even-odd rule, a point on an edge inside.
-
-Functions of them (numbers):
-
-* ``points_in(P, POLY)``: how many of the points lie inside the polygon or on its boundary
-  (Nav2's polygons count the data points inside them against ``min_points``);
-* ``collision_time(P, POLY, vx, wz, dt, horizon[, min_points])`` (s): the robot's polygon
-  (its footprint, in the points' frame: the base's) moved along the arc of the twist ``vx``
-  (m/s, forward) and ``wz`` (rad/s, counter-clockwise) from rest pose: the first time ``k *
-  dt`` (``k = 0, 1, ...``, up to ``horizon``) at which at least ``min_points`` (default 1) of
-  the points lie in the moved polygon; +inf when none does within the horizon. Nav2's
-  *approach* behaviour does this with its ``simulation_time_step`` and
-  ``time_before_collision``; here the pose at each step is the arc's own (a constant twist
-  moves the base along a circle of radius ``vx / wz``, a straight line for ``wz = 0``), where
-  Nav2 integrates the twist step by step (the same on a straight path).
-
-Every function takes its values as rows (one per tick, or one per message of a block: the
-vectorized evaluation) and gives one number per row, so the tick-by-tick and the block
-evaluation run the same numpy code (:func:`compile_geometry`).
+Values (only arguments of the functions that use them): points (:class:`Points`:
+``scan_points``, REP 103 and REP 117; ``cloud_points``; moved through TF, REP 105) and
+polygons (:class:`Polygon`, m, even-odd rule). Functions (numbers): ``points_in(P, POLY)``
+and ``collision_time(P, POLY, vx, wz, dt, horizon[, min_points])`` (s; +inf when no collision
+within the horizon); a blind sensor makes them NaN. Every function takes rows (one per tick
+or per message of a block) and gives one number per row (:func:`compile_geometry`). Each
+value and function in full: ARCHITECTURE.md ("Geometry in the bindings").
 """
 
 from __future__ import annotations
