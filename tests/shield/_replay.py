@@ -77,3 +77,14 @@ def rosbag2_copy(src: Path, bag: Path, **writer_options) -> None:
                 conns[channel.topic] = w.add_connection(channel.topic, schema.name,
                                                         typestore=store)
             w.write(conns[channel.topic], m.log_time, m.data)
+
+
+def python_shield(tmp: Path, name: str, requirements: str, bindings: str) -> Path:
+    """The folder ``tmp/shield`` of ``fretc shield --emit python`` over ``requirements`` and
+    ``bindings`` written as ``tmp/name.fret`` and ``tmp/name.bindings.toml`` (exit 0)."""
+    (tmp / f"{name}.fret").write_text(requirements)
+    (tmp / f"{name}.bindings.toml").write_text(bindings)
+    got = run("shield", str(tmp / f"{name}.fret"), "-b", str(tmp / f"{name}.bindings.toml"),
+              "--emit", "python", "-o", str(tmp / "shield"))
+    assert got.exit_code == 0, got.output
+    return tmp / "shield"

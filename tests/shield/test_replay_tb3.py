@@ -17,6 +17,7 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 
+from _replay import python_shield
 from fretc.cli import main
 
 BAG = "data/foreign_logs/fuse_tb3/turtlebot3.bag"
@@ -67,12 +68,7 @@ def replayed(tmp_path_factory):
     if not PRESENT:
         pytest.skip(REASON)
     tmp = tmp_path_factory.mktemp("tb3")
-    (tmp / "tb3.fret").write_text(REQUIREMENTS)
-    (tmp / "tb3.bindings.toml").write_text(BINDINGS)
-    got = CliRunner().invoke(main, ["shield", str(tmp / "tb3.fret"), "-b",
-                                    str(tmp / "tb3.bindings.toml"), "--emit", "python", "-o",
-                                    str(tmp / "shield")])
-    assert got.exit_code == 0, got.output
+    python_shield(tmp, "tb3", REQUIREMENTS, BINDINGS)
     bag = SHARED / BAG
     got = CliRunner().invoke(main, ["shield-replay", str(tmp / "shield"), str(bag), "-o",
                                     str(tmp / "out"), "-r", str(tmp / "tb3.fret"), "--json",

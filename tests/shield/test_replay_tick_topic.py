@@ -19,6 +19,7 @@ import pytest
 from click.testing import CliRunner
 from test_replay_tb3 import REQUIREMENTS, atoms, outputs_on, published, twist_values, valid_min
 
+from _replay import python_shield
 from fretc.cli import main
 
 REPO = Path(__file__).resolve().parents[2]
@@ -42,12 +43,7 @@ BINDINGS = ("[tick]\ntopic = \"/cmd_vel\"\nnominal_rate = \"10 Hz\"\ntime = \"lo
 def replayed(tmp_path_factory):
     """(the shield folder, the output folder, the replay's JSON run)."""
     tmp = tmp_path_factory.mktemp("tick_topic")
-    (tmp / "r.fret").write_text(REQUIREMENTS)
-    (tmp / "r.bindings.toml").write_text(BINDINGS)
-    got = CliRunner().invoke(main, ["shield", str(tmp / "r.fret"), "-b",
-                                    str(tmp / "r.bindings.toml"), "--emit", "python", "-o",
-                                    str(tmp / "shield")])
-    assert got.exit_code == 0, got.output
+    python_shield(tmp, "r", REQUIREMENTS, BINDINGS)
     got = CliRunner().invoke(main, ["shield-replay", str(tmp / "shield"), str(TRACE), "-o",
                                     str(tmp / "out"), "-r", str(tmp / "r.fret"), "--json",
                                     str(tmp / "replay.json")])
