@@ -5,6 +5,7 @@ going backwards, a payload that does not decode) are data problems, never crashe
 
 from __future__ import annotations
 
+import json
 import socket
 import struct
 import threading
@@ -186,6 +187,13 @@ def _run_synthetic(plan, server, publish, wait=0.5, last=None):
     return w, la
 
 
+def jsonl_finals(output: str) -> tuple[list[dict], dict[str, str]]:
+    """The JSON lines of ``fretc watch --jsonl``'s output, and the final verdict of each
+    requirement."""
+    lines = [json.loads(x) for x in output.splitlines() if x.startswith("{")]
+    return lines, {x["requirement"]: x["verdict"] for x in lines if x["event"] == "final"}
+
+
 #: the bindings of /a and /b (tests/live/test_watch_run_end.py too)
 AB_BINDINGS = """[tick]
 period = "100 ms"
@@ -279,7 +287,6 @@ def test_bad_payload_and_clock_backwards_are_data_problems_a_publisher_leaving_i
 def test_cli_watch_jsonl_and_exit_code(tmp_path):
     """The command end to end (in-process click runner): JSON lines and the audit's exit
     code (1: sif_disabled violates R1, R2, R5)."""
-    import json
 
     from click.testing import CliRunner
 
@@ -307,8 +314,7 @@ def test_cli_watch_jsonl_and_exit_code(tmp_path):
     finally:
         server.stop()
     assert res.exit_code == 1, res.output
-    lines = [json.loads(x) for x in res.output.splitlines() if x.startswith("{")]
-    finals = {x["requirement"]: x["verdict"] for x in lines if x["event"] == "final"}
+    lines, finals = jsonl_finals(res.output)
     assert finals == {"R1": "violated", "R2": "violated", "R3": "vacuous", "R4": "satisfied",
                       "R5": "violated", "R6": "vacuous"}
     assert any(x["event"] == "pt" and x["verdict"] == "violated" for x in lines)

@@ -19,7 +19,7 @@ from _logs import DIAG_BINDINGS, ROS2, S, TRACK_BINDINGS, float64, write_mcap  #
 from _logs import track_types as _types  # noqa: E402
 from fretc.audit import AuditConfig, audit_log, load_plan  # noqa: E402
 from fretc.live.websocket.serve import FoxgloveServer, advertise_mcap, replay_mcap  # noqa: E402
-from test_watch import _watch_trace  # noqa: E402
+from test_watch import _watch_trace, jsonl_finals  # noqa: E402
 
 pytestmark = pytest.mark.watch
 
@@ -217,8 +217,7 @@ def test_cli_watch_prints_and_exits_with_the_per_entity_verdicts(tmp_path):
     finally:
         server.stop()
     assert res.exit_code == 1, res.output
-    lines = [json.loads(x) for x in res.output.splitlines() if x.startswith("{")]
-    finals = {x["requirement"]: x["verdict"] for x in lines if x["event"] == "final"}
+    lines, finals = jsonl_finals(res.output)
     ref = {v.requirement: v.verdict for v in audit_log(_plan(tmp_path, FRET_T),
                                                         str(log)).verdicts}
     assert finals == ref and finals["T[track=2]"] == "violated"
