@@ -98,11 +98,17 @@ def _audit(tmp_path: Path, fret: str, bindings: str, log: Path):
     return audit_log(load_plan(AuditConfig(requirements=(str(tmp_path / "g.fret"),))), str(log))
 
 
-def test_an_error_superseded_within_a_tick_is_violated_at_the_next_tick(tmp_path):
+def _spike(path, extra=()):
+    """/v at 1.0 every 100 ms for 2 s, and a 9.0 then a 1.0 between the ticks at 0.5 and
+    0.6 s; ``extra`` (log time, value) messages too."""
     msgs = [("/v", "std_msgs/msg/Float64", S + i * S // 10, float64(1.0)) for i in range(20)]
-    msgs += [("/v", "std_msgs/msg/Float64", S + 5 * S // 10 + 1000, float64(9.0)),
-             ("/v", "std_msgs/msg/Float64", S + 5 * S // 10 + 2000, float64(1.0))]
-    log = write_mcap(tmp_path / "e.mcap", sorted(msgs, key=lambda m: m[2]))
+    msgs += [("/v", "std_msgs/msg/Float64", t, float64(x))
+             for t, x in [(S + 5 * S // 10 + 1000, 9.0), (S + 5 * S // 10 + 2000, 1.0), *extra]]
+    return write_mcap(path, sorted(msgs, key=lambda m: m[2]))
+
+
+def test_an_error_superseded_within_a_tick_is_violated_at_the_next_tick(tmp_path):
+    log = _spike(tmp_path / "e.mcap")
     la = _audit(tmp_path, "@tick_period 100 ms\nE1: agent shall always satisfy !err\n"
                 "E2: agent shall always satisfy !err_held\n",
                 '[tick]\nperiod = "100 ms"\n[variables]\n'
@@ -150,11 +156,7 @@ def test_aggregations_are_whole_bindings_of_one_topic(expr, where):
 
 @pytest.mark.tor("TOR-BND-005")
 def test_a_boolean_that_skipped_a_change_says_so(tmp_path):
-    msgs = [("/v", "std_msgs/msg/Float64", S + i * S // 10, float64(1.0)) for i in range(20)]
-    msgs += [("/v", "std_msgs/msg/Float64", S + 5 * S // 10 + 1000, float64(9.0)),
-             ("/v", "std_msgs/msg/Float64", S + 5 * S // 10 + 2000, float64(1.0)),
-             ("/v", "std_msgs/msg/Float64", S + 8 * S // 10 + 2000, float64(2.0))]
-    log = write_mcap(tmp_path / "m.mcap", sorted(msgs, key=lambda m: m[2]))
+    log = _spike(tmp_path / "m.mcap", [(S + 8 * S // 10 + 2000, 2.0)])
     la = _audit(tmp_path, "@tick_period 100 ms\nE2: agent shall always satisfy !err_held\n"
                 "E3: agent shall always satisfy x < 5\n",
                 '[tick]\nperiod = "100 ms"\n[variables]\n'
