@@ -171,22 +171,29 @@ def test_the_shield_refuses_no_whole_number_output_it_cannot_take(tmp_path):
             ["go", "slow"], ["gear", "ready"], fork=False)
 
 
+def _gear_shield(tmp_path, variables: str):
+    """(the bindings, the shield) of GEAR over inputs go, slow and outputs gear, ready, bound
+    by ``go = "/go.data"`` and ``variables`` (gear.bindings.toml)."""
+    from fretc.signals.bindings.files import load_bindings
+
+    b = tmp_path / "gear.bindings.toml"
+    b.write_text('[tick]\nperiod = "100 ms"\n[variables]\ngo = "/go.data"\n' + variables,
+                 encoding="utf-8")
+    bindings = load_bindings(b)
+    compiled = compile_entries(load_requirements([_export(tmp_path, GEAR)]))
+    return bindings, build_shield(compiled, ["go", "slow"], ["gear", "ready"],
+                                  bindings=bindings, fork=False)
+
+
 def test_the_ros_2_node_publishes_the_whole_number_of_a_kept_proposal(tmp_path):
     """The node forwarded a proposal whose atoms the shield kept as it came: the whole
     number the shield made of 4.4 never reached the topic."""
     from types import SimpleNamespace
 
     from fretc.shield.messages import MessageShield
-    from fretc.signals.bindings.files import load_bindings
 
-    b = tmp_path / "gear.bindings.toml"
-    b.write_text('[tick]\nperiod = "100 ms"\n[variables]\ngo = "/go.data"\n'
-                 'slow = "/slow.data"\ngear = "/gear_cmd.data"\nready = "/ready_cmd.data"\n',
-                 encoding="utf-8")
-    bindings = load_bindings(b)
-    compiled = compile_entries(load_requirements([_export(tmp_path, GEAR)]))
-    shield = build_shield(compiled, ["go", "slow"], ["gear", "ready"], bindings=bindings,
-                          fork=False)
+    bindings, shield = _gear_shield(tmp_path, 'slow = "/slow.data"\ngear = "/gear_cmd.data"\n'
+                                              'ready = "/ready_cmd.data"\n')
     node = MessageShield(ShieldRuntime(tables(shield)), bindings,
                          {"/gear_cmd": "/gear_prop", "/ready_cmd": "/ready_prop"},
                          lambda topic: SimpleNamespace(data=0))
@@ -207,16 +214,9 @@ def test_a_whole_number_output_beside_a_corrected_boolean_of_its_message_stays_w
     from types import SimpleNamespace
 
     from fretc.shield.messages import MessageShield
-    from fretc.signals.bindings.files import load_bindings
 
-    b = tmp_path / "gear.bindings.toml"
-    b.write_text('[tick]\nperiod = "100 ms"\n[variables]\ngo = "/go.data"\n'
-                 'slow = "/slow.data"\ngear = "/cmd.gear"\nready = "/cmd.ready"\n',
-                 encoding="utf-8")
-    bindings = load_bindings(b)
-    compiled = compile_entries(load_requirements([_export(tmp_path, GEAR)]))
-    shield = build_shield(compiled, ["go", "slow"], ["gear", "ready"], bindings=bindings,
-                          fork=False)
+    bindings, shield = _gear_shield(tmp_path, 'slow = "/slow.data"\ngear = "/cmd.gear"\n'
+                                              'ready = "/cmd.ready"\n')
     node = MessageShield(ShieldRuntime(tables(shield)), bindings, {"/cmd": "/prop"},
                          lambda topic: SimpleNamespace(gear=0.0, ready=False))
     rows = [(True, True, 1.0, False), (False, True, 3.3, False), (False, False, 4.0, False),
