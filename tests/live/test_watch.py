@@ -350,13 +350,11 @@ def test_live_simulator_equals_the_recorded_trace(plan):
     assert [_key(v) for v in la.verdicts] == [_key(v) for v in ref.verdicts]
 
 
-def test_a_clock_reset_is_never_a_pass_over_the_messages_it_skipped(tmp_path):
-    """The run's clock goes back (a simulator reset): the messages stamped before the last
-    one used are skipped, and they held violating values. Was: 'satisfied' (exit 3) over
-    them. Each is a message lost at its log time, so the ticks it would have held at are
-    unknown: never satisfied."""
+def _watch_a_ok(tmp_path, bindings: str, then=None):
+    """The watch's audit of ``RA: always a_ok`` over ``bindings``: /a (Float64) published 10
+    times at 1.0, 50 ms apart from ``t0``, then ``then(server, t0)`` if given."""
     plan = _write_reqs(tmp_path, "@tick_period 100 ms\nRA: the robot shall always satisfy "
-                                 "a_ok\n", BINDINGS)
+                                 "a_ok\n", bindings)
     server = FoxgloveServer(port=0)
     t0 = 1_700_000_000 * S
     try:
@@ -366,13 +364,26 @@ def test_a_clock_reset_is_never_a_pass_over_the_messages_it_skipped(tmp_path):
             for k in range(10):
                 srv.log("/a", _f64(1.0), t0 + k * 50_000_000)
                 time.sleep(0.005)
-            for k in range(10):  # the clock starts again from t0: violating values
-                srv.log("/a", _f64(-1.0), t0 + k * 40_000_000)
-                time.sleep(0.005)
+            if then is not None:
+                then(srv, t0)
 
-        w, la = _run_synthetic(plan, server, publish, last=t0 + 9 * 50_000_000)
+        _w, la = _run_synthetic(plan, server, publish, last=t0 + 9 * 50_000_000)
     finally:
         server.stop()
+    return la
+
+
+def test_a_clock_reset_is_never_a_pass_over_the_messages_it_skipped(tmp_path):
+    """The run's clock goes back (a simulator reset): the messages stamped before the last
+    one used are skipped, and they held violating values. Was: 'satisfied' (exit 3) over
+    them. Each is a message lost at its log time, so the ticks it would have held at are
+    unknown: never satisfied."""
+    def reset(srv, t0):
+        for k in range(10):  # the clock starts again from t0: violating values
+            srv.log("/a", _f64(-1.0), t0 + k * 40_000_000)
+            time.sleep(0.005)
+
+    la = _watch_a_ok(tmp_path, BINDINGS, then=reset)
     (ra,) = la.verdicts
     assert CLOCK_BACKWARDS in {p["kind"] for p in la.problems}
     assert ra.verdict == "unknown", (ra.verdict, ra.unknown_reason)
@@ -398,21 +409,7 @@ def test_a_topic_advertised_with_another_type_than_the_bindings_declare_is_not_r
     error. Now the topic is unreadable with the reason, its requirement an error."""
     b = ('[tick]\nperiod = "100 ms"\ntime = "log"\n[types]\n"/a" = "std_msgs/Bool"\n'
          '[variables]\na_ok = "/a.data"\n')
-    plan = _write_reqs(tmp_path, "@tick_period 100 ms\nRA: the robot shall always satisfy "
-                                 "a_ok\n", b)
-    server = FoxgloveServer(port=0)
-    t0 = 1_700_000_000 * S
-    try:
-        server.channel("/a", "cdr", *FLOAT64)
-
-        def publish(srv):
-            for k in range(10):
-                srv.log("/a", _f64(1.0), t0 + k * 50_000_000)
-                time.sleep(0.005)
-
-        w, la = _run_synthetic(plan, server, publish, last=t0 + 9 * 50_000_000)
-    finally:
-        server.stop()
+    la = _watch_a_ok(tmp_path, b)
     (ra,) = la.verdicts
     assert ra.verdict == "error" and "advertised as std_msgs/msg/Float64" in ra.error
 
