@@ -33,7 +33,6 @@ past Spot's 16 ticks and arithmetic identities, takes most of it.
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 import time
 from pathlib import Path
@@ -47,31 +46,14 @@ from fretc.testing.generate import (SPURIOUS, Finder, column_kinds, generate,  #
                                  separating_trace)
 from fretc.check.budget import Budget  # noqa: E402
 from fretc.check.solver import UNKNOWN, SpotWorker  # noqa: E402
-from fretc.common.errors import FretishError  # noqa: E402
 from fretc.compiler.build import compile_entries  # noqa: E402
 from fretc.compiler.mutants import mutants  # noqa: E402
 from fretc.compiler.semantics import SemanticsError, formalize  # noqa: E402
-from fretc.fretish.files import RequirementEntry, load_requirements  # noqa: E402
-from fretc.fretish.parser import parse  # noqa: E402
+from fretc.fretish.files import load_requirements  # noqa: E402
 from fretc.monitors.interval import verdict_of  # noqa: E402
+from bench_check import corpus_groups  # noqa: E402  (the case-study corpus by project)
 
 CORPUS = ROOT.parent / "shared" / "corpora" / "fret_casestudies.jsonl"
-
-
-def corpus_groups(path: Path) -> dict[str, list]:
-    """Project -> requirement entries of the case-study corpus (unparsable ones kept with
-    their error, then dropped by the caller)."""
-    groups: dict[str, list] = {}
-    for n, line in enumerate(path.read_text(encoding="utf-8").splitlines(), start=1):
-        d = json.loads(line)
-        group, _, rid = d["id"].partition("#")
-        e = RequirementEntry(id=rid, text=d["text"], source=path.name, line=n, column=1)
-        try:
-            e.requirement = parse(d["text"], source=path.name, line=n, column=1)
-        except FretishError as exc:
-            e.error = exc
-        groups.setdefault(group, []).append(e)
-    return groups
 
 
 def _columns(rows, kinds):
