@@ -27,6 +27,7 @@ from hypothesis import strategies as st
 
 import _metamorphic as M
 from test_metamorphic import ALL, SAMPLE, _case
+from test_csv_chunks import REQUIREMENTS as CHUNKS_REQUIREMENTS
 
 import fretc.audit.log as audit_log_module
 import fretc.audit.streamed as streamed
@@ -39,15 +40,8 @@ from fretc.audit.sampled.csv import write_sampled_csv
 from fretc.audit.verdict import audit_json
 from fretc.logs.csv.source import CLOCK_COLUMN, CsvSource
 
-REQUIREMENTS = """\
-@tick_period 100 ms
-R1: the sw shall always satisfy x < 2
-R2: upon p the sw shall within 3 ticks satisfy q
-R3: whenever p the sw shall immediately satisfy x >= 0.5 | q
-R4: in q mode the sw shall always satisfy x <= 3
-R5: after p the sw shall eventually satisfy q
-R6: upon p the sw shall for 2 ticks satisfy x > 0
-R7: the sw shall always satisfy x < 2.5 & !(p & q)
+#: test_csv_chunks' seven requirements (R1 .. R7), then more of every kind
+REQUIREMENTS = "@tick_period 100 ms\n" + CHUNKS_REQUIREMENTS + """\
 R8: in m mode whenever p the sw shall at the next timepoint satisfy q
 R9: only in m mode upon p the sw shall within 2 ticks satisfy !q
 R10: before p the sw shall never satisfy x > 3
