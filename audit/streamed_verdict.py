@@ -51,12 +51,16 @@ class PickedTicks(StreamTicks):
         self.held, self.last_held, self.period_ns = picked.held, last_held, period_ns
 
     def point(self, i: int) -> TimePoint:
+        """Tick ``i`` as a :class:`TimePoint` (its time and held log time; the last tick's
+        kept by the streams)."""
         j = min(max(i, 0), self.n - 1)
         if j == self.n - 1:
             return TimePoint(int(i), self.last_time, self.last_held)
         return TimePoint(int(i), self.times[j], self.held[j])
 
     def time_at(self, i: int) -> int | None:
+        """Tick ``i``'s time (ns): a picked tick's, the last tick's, or past it counted on
+        with the tick period; None where none is known."""
         if 0 <= i < self.n - 1:
             return self.times[i]
         if i == self.n - 1:

@@ -43,7 +43,7 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -537,7 +537,7 @@ class Ltl3SetStream:
 
 def letters_of(atoms: tuple[Node, ...], columns: Mapping[str, np.ndarray],
                unknown: Mapping[str, np.ndarray], k: int, start: int, carry: dict,
-               **how) -> tuple[np.ndarray, np.ndarray]:
+               **how: Any) -> tuple[np.ndarray, np.ndarray]:
     """The letters of ``k`` ticks over ``atoms`` (bit ``j`` atom ``j``): ``(known, free)``,
     the bits true in every completion and the bits unknown (int64 arrays); each atom's
     temporal state in ``carry`` (atom -> its carry); ``how`` as :func:`kleene_values`'s."""

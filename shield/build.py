@@ -242,17 +242,7 @@ def build_shield(compiled: Sequence[Any], inputs: Sequence[str], outputs: Sequen
         raise ShieldError("--prefer names " + ", ".join(unknown) + ", not an output atom of "
                           "an enforced requirement (" + ", ".join(sorted(texts)) + ")")
     read = frozenset(v for c in [*compiled, *assumptions] for v in c.formalization.variables)
-    unread = [f"{v}: declared an input, read by no requirement (not used)" for v in p.inputs
-              if v not in read]
-    in_message = {v for c in p.components for g in c.messages if g.model is not None
-                  for v in g.model["passed"]}
-    twisted = {v for c in p.components for t in c.twists for v in t}
-    unread += [f"{v}: declared an output, read by no requirement (passed through unchanged"
-               + (", scaled with its twist" if v in twisted else "")
-               + (", where the decided message of its topic keeps its field"
-                  + ("" if v in twisted else "; the C form has no field for it")
-                  if v in in_message else "") + ")"
-               for v in p.outputs if v not in read]
+    unread = _unread_notes(p, read)
     assert len(periods) <= 1  # (mixed periods were refused above)
     from fretc.shield.fallback import fallback_of
 
@@ -277,6 +267,24 @@ def build_shield(compiled: Sequence[Any], inputs: Sequence[str], outputs: Sequen
                   read, tuple(p.notes) + tuple(unread) + tuple(fb_notes), digest,
                   integers=tuple(p.integers), fallback=fb, assumptions=assumed,
                   twists=tuple(tuple(t) for t in twists))
+
+
+def _unread_notes(p: Any, read: frozenset[str]) -> list[str]:
+    """The notes of the declared inputs and outputs of the plan ``p`` that no requirement
+    reads (``read``): an input not used; an output passed through unchanged (scaled with
+    its twist, kept in its message's field)."""
+    unread = [f"{v}: declared an input, read by no requirement (not used)" for v in p.inputs
+              if v not in read]
+    in_message = {v for c in p.components for g in c.messages if g.model is not None
+                  for v in g.model["passed"]}
+    twisted = {v for c in p.components for t in c.twists for v in t}
+    unread += [f"{v}: declared an output, read by no requirement (passed through unchanged"
+               + (", scaled with its twist" if v in twisted else "")
+               + (", where the decided message of its topic keeps its field"
+                  + ("" if v in twisted else "; the C form has no field for it")
+                  if v in in_message else "") + ")"
+               for v in p.outputs if v not in read]
+    return unread
 
 
 def _declared(compiled: Sequence[Any]) -> list[FretVariable]:

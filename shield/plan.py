@@ -158,15 +158,7 @@ def plan(compiled: Sequence[Any], inputs: Sequence[str], outputs: Sequence[str],
         item = make_item(k, c)
         undeclared = [v for v in item.variables if v not in inputs and v not in outputs]
         _refuse_streams(c, undeclared)
-        if undeclared:
-            fret = {v.name: v for v in getattr(c.entry, "variables", ())}
-            kinds = [f"{v} is {'an' if fret[v].kind[0] in 'IO' else 'a'} {fret[v].kind} "
-                     "variable" + (f" of {fret[v].component}" if fret[v].component else "")
-                     + " in FRET's export" for v in undeclared if v in fret and fret[v].kind]
-            raise ShieldError(f"{_where(c)}: {c.id} reads {', '.join(undeclared)}, declared "
-                              "neither input nor output (--inputs/--outputs, or @inputs/"
-                              "@outputs in the file): the shield must know who sets each"
-                              + (f" ({'; '.join(kinds)})" if kinds else ""))
+        _refuse_undeclared(c, undeclared)
         if all(v in inputs for v in item.variables) and not set(item.variables) & linked:
             monitored[c.id] = ("over inputs only (" + ", ".join(item.variables) + "): the "
                                "environment's, no output can keep it; monitored, not enforced"
@@ -202,6 +194,21 @@ def plan(compiled: Sequence[Any], inputs: Sequence[str], outputs: Sequence[str],
         components.append(comp)
     _twists_read(turns, components, notes)
     return Plan(inputs, outputs, components, monitored, notes, whole)
+
+
+def _refuse_undeclared(c: Any, undeclared: Sequence[str]) -> None:
+    """Raise :class:`ShieldError` when requirement ``c`` reads variables declared neither
+    input nor output (``undeclared``), naming their kind in a FRET export."""
+    if not undeclared:
+        return
+    fret = {v.name: v for v in getattr(c.entry, "variables", ())}
+    kinds = [f"{v} is {'an' if fret[v].kind[0] in 'IO' else 'a'} {fret[v].kind} "
+             "variable" + (f" of {fret[v].component}" if fret[v].component else "")
+             + " in FRET's export" for v in undeclared if v in fret and fret[v].kind]
+    raise ShieldError(f"{_where(c)}: {c.id} reads {', '.join(undeclared)}, declared "
+                      "neither input nor output (--inputs/--outputs, or @inputs/"
+                      "@outputs in the file): the shield must know who sets each"
+                      + (f" ({'; '.join(kinds)})" if kinds else ""))
 
 
 def _fields(e: Expr) -> set[tuple[str, tuple[str, ...]]]:
@@ -499,16 +506,7 @@ def _component(items: list[CheckItem], inputs: list[str], groups: list[list[str]
             cube = " & ".join(to_smv(a) if v else f"!{to_smv(a)}"
                               for a, v in zip(cl.atoms, values))
             notes.append(f"never chosen: {cube} ({why})")
-    names: dict[Node, Node] = {}
-    game_inputs = list(inputs)
-    for cl in clusters:
-        for a in cl.atoms:
-            if preds.is_predicate(a) and a not in names:
-                names[a] = ir.ap(f"{preds.PREFIX}{len(names)}")
-                if cl.is_input:
-                    game_inputs.append(ir.name_of(names[a]))
-    for a in bounds:  # (the controller's atoms)
-        names[a] = ir.ap(f"{preds.PREFIX}{len(names)}")
+    names, game_inputs = _game_names(clusters, bounds, inputs)
     for cl in clusters:
         inv = preds.substitute(cl.invariant, names)
         if cl.is_input:
@@ -547,6 +545,24 @@ def _component(items: list[CheckItem], inputs: list[str], groups: list[list[str]
     turns = [t for t in twists if set(t) & used]
     return Component(items, env_inv, ctl_inv, messages, clusters, names, game_pts,
                      game_inputs, list(assumptions), watch, raw_pts, bounds, turns)
+
+
+def _game_names(clusters: Sequence[Any], bounds: dict[Node, Bound], inputs: Sequence[str]
+                ) -> tuple[dict[Node, Node], list[str]]:
+    """The game's propositions of the comparisons of ``clusters`` and of the ``bounds``
+    (``PREFIX`` and a number each, in order), and the game's inputs: ``inputs`` and the
+    propositions of the environment's clusters (a bound is the controller's)."""
+    names: dict[Node, Node] = {}
+    game_inputs = list(inputs)
+    for cl in clusters:
+        for a in cl.atoms:
+            if preds.is_predicate(a) and a not in names:
+                names[a] = ir.ap(f"{preds.PREFIX}{len(names)}")
+                if cl.is_input:
+                    game_inputs.append(ir.name_of(names[a]))
+    for a in bounds:  # (the controller's atoms)
+        names[a] = ir.ap(f"{preds.PREFIX}{len(names)}")
+    return names, game_inputs
 
 
 def _without_bounds(f: Node, bounds: dict[Node, Bound]) -> Node:
