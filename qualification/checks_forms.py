@@ -87,6 +87,17 @@ SHIELD_KEYS = {"S1": "null,holding,immediately", "S2": "null,regular,for"}
 SHIELD_RUNS = 40
 
 
+def shield_command(folder: Path, o_binding: str = "/o.data") -> list[str]:
+    """Write :data:`SHIELD_REQUIREMENTS` and their bindings (``x`` the Float64 of /x, ``o``
+    bound to ``o_binding``, 100 ms ticks) into ``folder``; returns the ``fretc shield``
+    arguments that read them (``--inputs x --outputs o``), without emits or output."""
+    (folder / "s.fret").write_text(SHIELD_REQUIREMENTS, encoding="utf-8")
+    (folder / "s.toml").write_text('[tick]\nperiod = "100 ms"\n\n[variables]\n'
+                                   f'x = "/x.data"\no = "{o_binding}"\n', encoding="utf-8")
+    return ["shield", str(folder / "s.fret"), "-b", str(folder / "s.toml"), "--inputs", "x",
+            "--outputs", "o"]
+
+
 def _load(path: Path) -> Any:
     """The Python module at ``path``, loaded under a name of its own."""
     spec = importlib.util.spec_from_file_location(f"qualify_{path.stem}", path)
@@ -126,11 +137,7 @@ def check_shield(run: Run) -> list[str]:
     """A shield synthesized from two requirements (``fretc shield --emit python``), its
     Python form loaded and stepped over random runs (:func:`_shield_runs`)."""
     folder = _folder(run, "shield")
-    (folder / "s.fret").write_text(SHIELD_REQUIREMENTS, encoding="utf-8")
-    (folder / "s.toml").write_text('[tick]\nperiod = "100 ms"\n\n[variables]\n'
-                                   'x = "/x.data"\no = "/o.data"\n', encoding="utf-8")
-    code, text = fretc(run, ["shield", str(folder / "s.fret"), "-b", str(folder / "s.toml"),
-                             "--inputs", "x", "--outputs", "o", "--emit", "python", "-o",
+    code, text = fretc(run, [*shield_command(folder), "--emit", "python", "-o",
                              str(folder / "out")])
     forms = sorted((folder / "out").glob("*_shield.py"))
     if code != 0 or len(forms) != 1:

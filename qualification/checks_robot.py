@@ -19,8 +19,8 @@ from typing import Any
 from fretc.qualification import reference as ref
 from fretc.qualification.checks import SEED, Check, CheckSkipped, Run, compiled_keys
 from fretc.qualification.checks_audit import fretc
-from fretc.qualification.checks_forms import (C_TIMEOUT, SHIELD_REQUIREMENTS, _compiler,
-                                              _folder, _load)
+from fretc.qualification.checks_forms import (C_TIMEOUT, _compiler, _folder, _load,
+                                              shield_command)
 
 #: every how many keys the LTL3 check takes one (Spot's emptiness per prefix is the cost)
 LTL3_STRIDE = 6
@@ -152,12 +152,8 @@ def check_shield_c(run: Run) -> list[str]:
     tick its output, ``overridden`` and reasons are the Python form's."""
     compiler = _compiler()
     folder = _folder(run, "shield-c")
-    (folder / "s.fret").write_text(SHIELD_REQUIREMENTS, encoding="utf-8")
-    (folder / "s.toml").write_text('[tick]\nperiod = "100 ms"\n\n[variables]\n'
-                                   'x = "/x.data"\no = "/o.data"\n', encoding="utf-8")
-    code, text = fretc(run, ["shield", str(folder / "s.fret"), "-b", str(folder / "s.toml"),
-                             "--inputs", "x", "--outputs", "o", "--emit", "python", "--emit",
-                             "c", "-o", str(folder / "out")])
+    code, text = fretc(run, [*shield_command(folder), "--emit", "python", "--emit", "c",
+                             "-o", str(folder / "out")])
     if code != 0:
         return [f"fretc shield exited {code}: {text.strip()[-300:]}"]
     gen = folder / "out"
@@ -203,12 +199,8 @@ def check_prove(run: Run) -> list[str]:
     loop (each requirement ``holds``, exit 0); under an assumption no run keeps, each is
     ``vacuous`` and the run says NOT PROVED with exit 1, never holds."""
     folder = _folder(run, "prove")
-    (folder / "s.fret").write_text(SHIELD_REQUIREMENTS, encoding="utf-8")
     (folder / "a.fret").write_text(IMPOSSIBLE, encoding="utf-8")
-    (folder / "s.toml").write_text('[tick]\nperiod = "100 ms"\n\n[variables]\n'
-                                   'x = "/x.data"\no = "/o.data"\n', encoding="utf-8")
-    base = ["shield", str(folder / "s.fret"), "-b", str(folder / "s.toml"), "--inputs", "x",
-            "--outputs", "o", "--prove", "--emit", "python"]
+    base = [*shield_command(folder), "--prove", "--emit", "python"]
     out = []
     code, text = fretc(run, [*base, "-o", str(folder / "plain")])
     if code != 0 or "S1: holds" not in text or "S2: holds" not in text:

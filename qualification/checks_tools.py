@@ -12,7 +12,7 @@ from typing import Any
 
 from fretc.qualification.checks import Check, Run
 from fretc.qualification.checks_audit import fretc, verdicts
-from fretc.qualification.checks_forms import SHIELD_REQUIREMENTS, _folder
+from fretc.qualification.checks_forms import _folder, shield_command
 from fretc.qualification.checks_logs import MS, S, write_mcap
 
 
@@ -140,12 +140,8 @@ def check_shield_replay(run: Run) -> list[str]:
     the shielded run satisfied (exit 0); the recording cut at 60 % replays to its damage
     (exit 3, the shielded run partial, never satisfied whole)."""
     folder = _folder(run, "shield-replay")
-    (folder / "s.fret").write_text(SHIELD_REQUIREMENTS, encoding="utf-8")
-    (folder / "s.toml").write_text('[tick]\nperiod = "100 ms"\n\n[variables]\n'
-                                   'x = "/x.data"\no = "/o.data > 0.5"\n', encoding="utf-8")
-    code, text = fretc(run, ["shield", str(folder / "s.fret"), "-b", str(folder / "s.toml"),
-                             "--inputs", "x", "--outputs", "o", "--emit", "python", "-o",
-                             str(folder / "shield")])
+    code, text = fretc(run, [*shield_command(folder, "/o.data > 0.5"), "--emit", "python",
+                             "-o", str(folder / "shield")])
     if code != 0:
         return [f"fretc shield exited {code}: {text.strip()[-300:]}"]
     msgs = sorted([("/x", S + k * 100 * MS, 9.0 if 3 <= k <= 6 else 1.0) for k in range(20)]
