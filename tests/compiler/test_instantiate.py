@@ -99,54 +99,37 @@ BOOLS = ["p", "q", "m", "true", "false", "FTP"]
 NUMS = ["x", "y", "3", "0"]
 
 
+NUM_FORMS = ("({a} {op} {b})", "absReal({a})", "preReal(0, {a})", "-{a}",
+             "maxReal({a}, {b})")
+# a connective four times in fourteen, as often as the temporal functions together
+BOOL_FORMS = ("!{a}", "!({a})", *["({a} {op} {b})"] * 4, "(if {a} then {b})",
+              "persisted({bound}, {a})", "occurred({bound}, {a})", "persists({bound}, {a})",
+              "occurs({bound}, {a})", "preBool({tf}, {a})", "{occ}({a}, {b})",
+              "ite({a}, {b}, {c})")
+
+
 @st.composite
 def num_expr(draw, depth: int):
     if depth <= 0 or draw(st.integers(0, 3)) == 0:
         return draw(st.sampled_from(NUMS))
-    k = draw(st.integers(0, 4))
-    a = draw(num_expr(depth - 1))
-    if k == 0:
-        return f"({a} {draw(st.sampled_from(['+', '-', '*', '/', '^']))} "\
-               f"{draw(num_expr(depth - 1))})"
-    if k == 1:
-        return f"absReal({a})"
-    if k == 2:
-        return f"preReal(0, {a})"
-    if k == 3:
-        return f"-{a}"
-    return f"maxReal({a}, {draw(num_expr(depth - 1))})"
+    form = draw(st.sampled_from(NUM_FORMS))
+    return form.format(a=draw(num_expr(depth - 1)), b=draw(num_expr(depth - 1)),
+                       op=draw(st.sampled_from(['+', '-', '*', '/', '^'])))
 
 
 @st.composite
 def bool_expr(draw, depth: int):
     if depth <= 0 or draw(st.integers(0, 4)) == 0:
-        k = draw(st.integers(0, 5))
-        if k == 0:
+        if draw(st.integers(0, 5)) == 0:
             return (f"{draw(num_expr(1))} {draw(st.sampled_from(['<', '<=', '=', '!=', '>']))}"
                     f" {draw(num_expr(1))}")
         return draw(st.sampled_from(BOOLS))
-    sub = lambda: draw(bool_expr(depth - 1))  # noqa: E731
-    bound = draw(st.sampled_from(["0", "1", "2", "0, 2", "1, 3"]))
-    k = draw(st.integers(0, 13))
-    if k <= 1:
-        return f"!{sub()}" if k == 0 else f"!({sub()})"
-    if k <= 5:
-        return f"({sub()} {draw(st.sampled_from(['&', '|', '->', 'xor', '<->']))} {sub()})"
-    if k == 6:
-        return f"(if {sub()} then {sub()})"
-    if k == 7:
-        return f"persisted({bound}, {sub()})"
-    if k == 8:
-        return f"occurred({bound}, {sub()})"
-    if k == 9:
-        return f"persists({bound}, {sub()})"
-    if k == 10:
-        return f"occurs({bound}, {sub()})"
-    if k == 11:
-        return f"preBool({draw(st.sampled_from(['true', 'false']))}, {sub()})"
-    if k == 12:
-        return f"{draw(st.sampled_from(['prevOcc', 'nextOcc']))}({sub()}, {sub()})"
-    return f"ite({sub()}, {sub()}, {sub()})"
+    form = draw(st.sampled_from(BOOL_FORMS))
+    a, b, c = (draw(bool_expr(depth - 1)) for _ in range(3))
+    return form.format(a=a, b=b, c=c, op=draw(st.sampled_from(['&', '|', '->', 'xor', '<->'])),
+                       bound=draw(st.sampled_from(["0", "1", "2", "0, 2", "1, 3"])),
+                       tf=draw(st.sampled_from(['true', 'false'])),
+                       occ=draw(st.sampled_from(['prevOcc', 'nextOcc'])))
 
 
 @st.composite

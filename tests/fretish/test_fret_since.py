@@ -6,6 +6,8 @@ semantics); a stream not monotone in its previous value stays a stream."""
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
 import pytest
 from hypothesis import given, settings
@@ -63,50 +65,33 @@ def _monotone(first: st.SearchStrategy) -> st.SearchStrategy:
         st.tuples(st.just("implies"), _free, t)), max_leaves=8)
 
 
-def _lustre(t: tuple) -> str:
-    k = t[0]
-    if k == "var":
-        return t[1]
-    if k == "lit":
-        return "true" if t[1] else "false"
-    if k == "pre":
-        return f"(pre {t[1]})"
-    if k == "self":
-        return "(pre s)" if not t[1] else "(true -> pre s)"
-    if k == "not":
-        return f"(not {_lustre(t[1])})"
-    if k in ("and", "or"):
-        return f"({_lustre(t[1])} {k} {_lustre(t[2])})"
-    if k == "ite":
-        return f"(if {_lustre(t[1])} then {_lustre(t[2])} else {_lustre(t[3])})"
-    if k in ("xor", "="):
-        return f"({_lustre(t[1])} {k} {_lustre(t[2])})"
-    if k == "pre of":
-        return f"(pre {_lustre(t[1])})"
-    op = "->" if k == "arrow" else "=>"
-    return f"({_lustre(t[1])} {op} {_lustre(t[2])})"
+def _printer(forms: dict) -> Callable[[tuple], str]:
+    """A printer of trees: ``forms[kind]`` takes the node's fields, subtrees printed."""
+    def show(t: tuple) -> str:
+        return forms[t[0]](*(show(x) if isinstance(x, tuple) else x for x in t[1:]))
+    return show
 
 
-def _fretish(t: tuple) -> str:
-    """The tree in FRETish (a Mode's requirement): ``preBool(b, s)`` as written."""
-    k = t[0]
-    if k == "var":
-        return t[1]
-    if k == "lit":
-        return "true" if t[1] else "false"
-    if k == "pre":
-        return f"preBool(false, {t[1]})"
-    if k == "self":
-        return f"preBool({'true' if t[1] else 'false'}, s)"
-    if k == "not":
-        return f"(! {_fretish(t[1])})"
-    if k in ("and", "or"):
-        return f"({_fretish(t[1])} {'&' if k == 'and' else '|'} {_fretish(t[2])})"
-    if k == "ite":
-        return f"ite({_fretish(t[1])}, {_fretish(t[2])}, {_fretish(t[3])})"
-    if k == "arrow":
-        return f"ite(FTP, {_fretish(t[1])}, {_fretish(t[2])})"
-    return f"({_fretish(t[1])} => {_fretish(t[2])})"
+def _lit(b: bool) -> str:
+    return "true" if b else "false"
+
+
+def _infix(op: str) -> Callable[[str, str], str]:
+    return lambda a, b: f"({a} {op} {b})"
+
+
+_lustre = _printer({
+    "var": str, "lit": _lit, "pre": lambda x: f"(pre {x})", "pre of": lambda a: f"(pre {a})",
+    "self": lambda b: "(true -> pre s)" if b else "(pre s)", "not": lambda a: f"(not {a})",
+    "and": _infix("and"), "or": _infix("or"), "xor": _infix("xor"), "=": _infix("="),
+    "arrow": _infix("->"), "implies": _infix("=>"),
+    "ite": lambda c, a, b: f"(if {c} then {a} else {b})"})
+# the tree in FRETish (a Mode's requirement): ``preBool(b, s)`` as written
+_fretish = _printer({
+    "var": str, "lit": _lit, "pre": lambda x: f"preBool(false, {x})",
+    "self": lambda b: f"preBool({_lit(b)}, s)", "not": lambda a: f"(! {a})",
+    "and": _infix("&"), "or": _infix("|"), "implies": _infix("=>"),
+    "arrow": lambda a, b: f"ite(FTP, {a}, {b})", "ite": lambda c, a, b: f"ite({c}, {a}, {b})"})
 
 
 def _has_self(t: tuple) -> bool:

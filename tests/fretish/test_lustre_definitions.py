@@ -198,47 +198,46 @@ def test_a_cycle_without_pre_and_a_definition_too_deep_stay_free_with_the_reason
     assert "nested more than 200 levels deep" in defs.free["deeper"]
 
 
+def _export(requirements: dict[str, str], *variables: tuple) -> dict:
+    """A FRET project export of component ``ctrl``: ``variables`` as (name, idType,
+    dataType) or (name, idType, dataType, {extra fields})."""
+    rows = [{"component_name": "ctrl", "variable_name": v[0], "idType": v[1],
+             "dataType": v[2], **(v[3] if len(v) > 3 else {})} for v in variables]
+    return {"requirements": [{"reqid": k, "fulltext": t} for k, t in requirements.items()],
+            "variables": rows}
+
+
+def _check(path, doc: dict, *options: str):
+    """``fretc check`` of ``doc`` written to ``path`` (the click result)."""
+    path.write_text(json.dumps(doc), encoding="utf-8")
+    return CliRunner().invoke(main, ["check", str(path), "--no-progress", *options])
+
+
 def test_a_deep_definition_is_no_internal_error_in_monitors_or_check(tmp_path):
     """A FRET export whose definition is a chain of 3,000 ``and``: ``--emit monitor`` and
     ``check`` read the variable as free (a note says why), exit 0/2, never 4."""
-    doc = {"requirements": [
-        {"reqid": "R1", "fulltext": "whenever d ctrl shall immediately satisfy o"}],
-        "variables": [
-        {"component_name": "ctrl", "variable_name": "a", "idType": "Input",
-         "dataType": "boolean"},
-        {"component_name": "ctrl", "variable_name": "o", "idType": "Output",
-         "dataType": "boolean"},
-        {"component_name": "ctrl", "variable_name": "d", "idType": "Internal",
-         "dataType": "boolean", "assignment": " and ".join(["a"] * 3000)}]}
+    doc = _export({"R1": "whenever d ctrl shall immediately satisfy o"},
+                  ("a", "Input", "boolean"), ("o", "Output", "boolean"),
+                  ("d", "Internal", "boolean", {"assignment": " and ".join(["a"] * 3000)}))
     path = tmp_path / "p.json"
-    path.write_text(json.dumps(doc), encoding="utf-8")
+    got = _check(path, doc)
+    assert got.exit_code == 2 and "nested more than 200 levels deep" in got.output, got.output
     got = CliRunner().invoke(main, [str(path), "--emit", "monitor", "-o",
                                     str(tmp_path / "m.py")])
     assert got.exit_code == 0, got.output
     assert "nested more than 200 levels deep" in got.stderr
-    got = CliRunner().invoke(main, ["check", str(path), "--no-progress"])
-    assert got.exit_code == 2 and "nested more than 200 levels deep" in got.output, got.output
 
 
 def test_check_reads_an_internal_variable_as_its_definition(tmp_path):
     """``hold`` is Internal, ``a and not b``: realizability is decided over the Inputs a, b
     (before, ``hold`` was a free variable declared neither input nor output: exit 2), and
     the note says the definition is used."""
-    doc = {"requirements": [
-        {"reqid": "R1", "fulltext": "whenever hold ctrl shall immediately satisfy o"},
-        {"reqid": "R2", "fulltext": "whenever b ctrl shall immediately satisfy !o"}],
-        "variables": [
-        {"component_name": "ctrl", "variable_name": "a", "idType": "Input",
-         "dataType": "boolean"},
-        {"component_name": "ctrl", "variable_name": "b", "idType": "Input",
-         "dataType": "boolean"},
-        {"component_name": "ctrl", "variable_name": "o", "idType": "Output",
-         "dataType": "boolean"},
-        {"component_name": "ctrl", "variable_name": "hold", "idType": "Internal",
-         "dataType": "boolean", "assignment": "a and not b"}]}
-    path = tmp_path / "p.json"
-    path.write_text(json.dumps(doc), encoding="utf-8")
-    got = CliRunner().invoke(main, ["check", str(path), "--no-progress", "--json"])
+    doc = _export({"R1": "whenever hold ctrl shall immediately satisfy o",
+                   "R2": "whenever b ctrl shall immediately satisfy !o"},
+                  ("a", "Input", "boolean"), ("b", "Input", "boolean"),
+                  ("o", "Output", "boolean"),
+                  ("hold", "Internal", "boolean", {"assignment": "a and not b"}))
+    got = _check(tmp_path / "p.json", doc, "--json")
     assert got.exit_code == 0, got.output
     res = json.loads(got.output)
     assert res["realizability"]["undeclared"] == []
@@ -247,8 +246,7 @@ def test_check_reads_an_internal_variable_as_its_definition(tmp_path):
                             "definition in the analysis") for n in res["notes"])
     # with hold "a or b" the two requirements conflict whenever b: unrealizable
     doc["variables"][3]["assignment"] = "a or b"
-    path.write_text(json.dumps(doc), encoding="utf-8")
-    got = CliRunner().invoke(main, ["check", str(path), "--no-progress", "--json"])
+    got = _check(tmp_path / "p.json", doc, "--json")
     assert got.exit_code == 1 and "unrealizable" in got.output, got.output
 
 
@@ -256,19 +254,12 @@ def test_a_mode_is_its_mode_requirement(tmp_path):
     """A Mode with FRET's mode requirement (a FRETish condition) is that condition: ``in
     cruise mode`` holds where ``speed > 10``; without a requirement it stays a free variable,
     declared neither input nor output (exit 2)."""
-    doc = {"requirements": [
-        {"reqid": "M1", "fulltext": "in cruise mode ctrl shall always satisfy o"},
-        {"reqid": "M2", "fulltext": "whenever speed <= 10 ctrl shall immediately satisfy !o"}],
-        "variables": [
-        {"component_name": "ctrl", "variable_name": "speed", "idType": "Input",
-         "dataType": "double"},
-        {"component_name": "ctrl", "variable_name": "o", "idType": "Output",
-         "dataType": "boolean"},
-        {"component_name": "ctrl", "variable_name": "cruise", "idType": "Mode",
-         "dataType": "boolean", "modeRequirement": "speed > 10"}]}
+    doc = _export({"M1": "in cruise mode ctrl shall always satisfy o",
+                   "M2": "whenever speed <= 10 ctrl shall immediately satisfy !o"},
+                  ("speed", "Input", "double"), ("o", "Output", "boolean"),
+                  ("cruise", "Mode", "boolean", {"modeRequirement": "speed > 10"}))
     path = tmp_path / "p.json"
-    path.write_text(json.dumps(doc), encoding="utf-8")
-    got = CliRunner().invoke(main, ["check", str(path), "--no-progress", "--json"])
+    got = _check(path, doc, "--json")
     assert got.exit_code == 0, got.output
     res = json.loads(got.output)
     assert all(g["realizable"] is True for g in res["realizability"]["groups"])
@@ -276,10 +267,8 @@ def test_a_mode_is_its_mode_requirement(tmp_path):
                for n in res["notes"])
     # the mode overlapping M2's trigger: o and !o both owed where 8 < speed <= 10
     doc["variables"][2]["modeRequirement"] = "speed > 8"
-    path.write_text(json.dumps(doc), encoding="utf-8")
-    got = CliRunner().invoke(main, ["check", str(path), "--no-progress", "--json"])
+    got = _check(path, doc, "--json")
     assert got.exit_code == 1 and "unrealizable" in got.output, got.output
     doc["variables"][2]["modeRequirement"] = ""
-    path.write_text(json.dumps(doc), encoding="utf-8")
-    got = CliRunner().invoke(main, ["check", str(path), "--no-progress", "--json"])
+    got = _check(path, doc, "--json")
     assert got.exit_code == 2 and "cruise a Mode of ctrl" in got.output, got.output
