@@ -25,6 +25,7 @@ from fretc.compiler.printers import to_smv
 
 Trace = Sequence[Mapping[str, Any]]
 
+ADD_SUB_MUL = {"+": operator.add, "-": operator.sub, "*": operator.mul}
 _CMP = {"=": operator.eq, "!=": operator.ne, "<": operator.lt, "<=": operator.le,
         ">": operator.gt, ">=": operator.ge}
 
@@ -33,12 +34,8 @@ _CMP = {"=": operator.eq, "!=": operator.ne, "<": operator.lt, "<=": operator.le
 # there)
 def _arith(op: str, a: float, b: float) -> float:
     try:
-        if op == "+":
-            return a + b
-        if op == "-":
-            return a - b
-        if op == "*":
-            return a * b
+        if op in ADD_SUB_MUL:
+            return ADD_SUB_MUL[op](a, b)
         if op == "/":
             return a / b
         if op == "mod":

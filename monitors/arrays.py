@@ -7,6 +7,8 @@ for single Python values.)"""
 
 from __future__ import annotations
 
+import operator
+
 import numpy as np
 from typing import Any, TYPE_CHECKING
 
@@ -23,6 +25,7 @@ COMPARISONS = {
 }
 #: The binary boolean connectives.
 CONNECTIVES = ("&", "|", "xor", "->", "<->")
+ADD_SUB_MUL = {"+": operator.add, "-": operator.sub, "*": operator.mul}
 
 
 def arith(op: str, x: np.ndarray, y: np.ndarray) -> np.ndarray:
@@ -34,12 +37,8 @@ def arith(op: str, x: np.ndarray, y: np.ndarray) -> np.ndarray:
     """
     # (the same cases as compiler.evaluate's scalar _arith, on whole columns at once)
     with np.errstate(all="ignore"):
-        if op == "+":
-            return x + y
-        if op == "-":
-            return x - y
-        if op == "*":
-            return x * y
+        if op in ADD_SUB_MUL:
+            return ADD_SUB_MUL[op](x, y)
         if op == "/":
             return np.where(y == 0, np.nan, x / np.where(y == 0, 1.0, y))
         if op == "mod":

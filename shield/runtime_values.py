@@ -76,12 +76,8 @@ def term_value(t: tuple[Any, ...], values: dict[str, Any]) -> Any:
         f = t[1][:3]
         return abs(xs[0]) if f == "abs" else min(xs) if f == "min" else max(xs)
     a, b = term_value(t[1], values), term_value(t[2], values)
-    if op == "+":
-        return a + b
-    if op == "-":
-        return a - b
-    if op == "*":
-        return a * b
+    if op in ("+", "-", "*"):
+        return a + b if op == "+" else a - b if op == "-" else a * b
     if b == 0:
         return math.nan if a == 0 or a != a else math.copysign(math.inf, a) * math.copysign(1.0, b)
     return a / b

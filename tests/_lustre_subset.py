@@ -260,12 +260,8 @@ def _op(op: str, a: Any, b: Any) -> Any:
         return a != b
     if op in ("<", "<=", ">", ">="):
         return {"<": a < b, "<=": a <= b, ">": a > b, ">=": a >= b}[op]
-    if op == "+":
-        return a + b
-    if op == "-":
-        return a - b
-    if op == "*":
-        return a * b
+    if op in ("+", "-", "*"):
+        return {"+": a + b, "-": a - b, "*": a * b}[op]
     if op == "/":
         return a / b if b else float("nan")
     if op == "div":
