@@ -316,29 +316,7 @@ def main() -> int:
 
 #: the 20-requirement set of part 7: deadlines and holds near 10^6 ticks over 3 inputs and
 #: 4 outputs (the hostile input that ran for an hour)
-LARGE = """@inputs r0, r1, r2
-@outputs a0, a1, a2, a3
-H0: upon r0 the ctrl shall within 1000000 ticks satisfy a0
-H1: upon a1 the ctrl shall for 999000 ticks satisfy !a2
-H2: whenever r2 & a2 the ctrl shall within 998000 ticks satisfy a3
-H3: upon a0 the ctrl shall within 997000 ticks satisfy !a3
-H4: upon r1 the ctrl shall for 996000 ticks satisfy a1 | a0
-H5: upon r2 the ctrl shall within 995000 ticks satisfy a1
-H6: upon a2 the ctrl shall for 994000 ticks satisfy !a3
-H7: whenever r1 & a3 the ctrl shall within 993000 ticks satisfy a0
-H8: upon a1 the ctrl shall within 992000 ticks satisfy !a0
-H9: upon r0 the ctrl shall for 991000 ticks satisfy a2 | a1
-H10: upon r1 the ctrl shall within 990000 ticks satisfy a2
-H11: upon a3 the ctrl shall for 989000 ticks satisfy !a0
-H12: whenever r0 & a0 the ctrl shall within 988000 ticks satisfy a1
-H13: upon a2 the ctrl shall within 987000 ticks satisfy !a1
-H14: upon r2 the ctrl shall for 986000 ticks satisfy a3 | a2
-H15: upon r0 the ctrl shall within 985000 ticks satisfy a3
-H16: upon a0 the ctrl shall for 984000 ticks satisfy !a1
-H17: whenever r2 & a1 the ctrl shall within 983000 ticks satisfy a2
-H18: upon a3 the ctrl shall within 982000 ticks satisfy !a2
-H19: upon r1 the ctrl shall for 981000 ticks satisfy a0 | a3
-"""
+LARGE = Path(__file__).resolve().parents[1] / "tests" / "fixtures" / "check" / "deadlines_near_1e6.fret"
 
 
 def large_set() -> None:
@@ -347,8 +325,7 @@ def large_set() -> None:
 
     print("7. 20 requirements with deadlines near 10^6 ticks: fretc check FILE --json")
     with tempfile.TemporaryDirectory() as tmp:
-        path = Path(tmp) / "h20.fret"
-        path.write_text(LARGE, encoding="utf-8")
+        path = LARGE
         docs = []
         for run in (1, 2):
             out = Path(tmp) / f"h20.{run}.json"
