@@ -23,9 +23,10 @@ import os
 import stat
 from typing import Any  # doorstop's objects: the library has no types
 
-from fretc.common.errors import FretishFileError, FretishSyntaxError
+from fretc.common.errors import FretishFileError
 
 from fretc.fretish.entry import DEFAULT_TEXT_ATTRIBUTE, Origin, RequirementEntry
+from fretc.fretish.sources import keep_entry
 
 __all__ = ["load_doorstop", "build_tree", "custom_attributes", "check_tree_files",
            "MAX_YAML_BYTES", "MAX_YAML_NODES"]
@@ -320,8 +321,6 @@ def load_doorstop(path: str, text_attribute: str | None = None
     :class:`FretishFileError`: a tree Doorstop cannot build, an item it cannot read or one
     outside the tree (:func:`_items`), a missing parent, a cycle, a text attribute that is
     not text."""
-    from fretc.fretish.parser import parse
-
     tree = build_tree(path)
     items = _items(tree, path)
     all_uids = {str(i.uid) for doc in tree for i in doc.items}
@@ -350,17 +349,7 @@ def load_doorstop(path: str, text_attribute: str | None = None
         line = _line_of(item.path, key)
         # the entry's source is the tree (what the audit is given again to rebuild it; the
         # item file is the origin's), its syntax errors name the item file
-        entry = RequirementEntry(str(item.uid), text, path, line, 1, rationale=rationale,
-                                 parent=origin.parents[0] if origin.parents else None,
-                                 origin=origin)
-        if not text:
-            unformalized.append(entry)
-            continue
-        try:
-            entry.requirement = parse(text, source=source, line=line, column=1)
-        except FretishSyntaxError as e:
-            entry.error = e
-        entries.append(entry)
+        keep_entry(str(item.uid), text, path, source, line, origin, entries, unformalized)
     return entries, unformalized
 
 

@@ -21,9 +21,10 @@ import os
 import re
 from typing import Any  # the reqif library's objects: it has no types
 
-from fretc.common.errors import FretishFileError, FretishSyntaxError
+from fretc.common.errors import FretishFileError
 
 from fretc.fretish.entry import DEFAULT_TEXT_ATTRIBUTE, Origin, RequirementEntry
+from fretc.fretish.sources import keep_entry
 from fretc.fretish.sources.safe_xml import MAX_BYTES, checked_text, read_reqif_members
 
 __all__ = ["load_reqif", "parse_reqif_bundles", "attribute_names", "ID_ATTRIBUTES"]
@@ -186,7 +187,6 @@ def _containers(content) -> dict[str, str]:
 
 
 def _read_bundle(source: str, content, text_attribute: str | None):
-    from fretc.fretish.parser import parse
 
     names = attribute_names(content, source)
     types = {t.identifier for t in content.spec_types or []}
@@ -227,17 +227,7 @@ def _read_bundle(source: str, content, text_attribute: str | None):
                         container=holder.get(so.identifier), text_attribute=wanted,
                         text=text)
         line = _line(so.xml_node)
-        entry = RequirementEntry(rid, text, source, line, 1, rationale=rationale,
-                                 parent=origin.parents[0] if origin.parents else None,
-                                 origin=origin)
-        if not text:
-            unformalized.append(entry)
-            continue
-        try:
-            entry.requirement = parse(text, source=source, line=line, column=1)
-        except FretishSyntaxError as e:
-            entry.error = e
-        entries.append(entry)
+        keep_entry(rid, text, source, source, line, origin, entries, unformalized)
     return entries, unformalized
 
 
