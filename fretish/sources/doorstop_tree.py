@@ -326,7 +326,8 @@ def load_doorstop(path: str, text_attribute: str | None = None
     all_uids = {str(i.uid) for doc in tree for i in doc.items}
     _check_links(items, all_uids)
     wanted = text_attribute or _default_attribute(items)
-    entries, unformalized = [], []
+    entries: list[RequirementEntry] = []
+    unformalized: list[RequirementEntry] = []
     for item in items:
         custom = {k.lower(): (k, v) for k, v in custom_attributes(item).items()}
         if wanted == "text":

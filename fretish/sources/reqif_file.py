@@ -214,7 +214,8 @@ def _read_bundle(source: str, content, text_attribute: str | None):
         target = ids.get(rel.target)
         parents.setdefault(rel.source, []).append(target[0] if target else rel.target)
     holder = _containers(content)
-    entries, unformalized = [], []
+    entries: list[RequirementEntry] = []
+    unformalized: list[RequirementEntry] = []
     for so in objects:
         rid, values, _node = ids[so.identifier]
         text = values.get(wanted.lower(), "").strip()
