@@ -32,7 +32,7 @@ from typing import TYPE_CHECKING
 from fretc.common.errors import FretishError
 from fretc.common.textsafe import one_line
 
-from fretc.compiler.codegen import file_stems
+from fretc.compiler.codegen import by_source, file_stems
 from fretc.compiler.ir import Node, name_of
 from fretc.compiler.printers import mangle, to_smv
 
@@ -206,9 +206,7 @@ def emit_psl(compiled: Sequence[Compiled], mapping_path: str | None = None) -> d
     mapping = load_mapping(mapping_path)
     for c in compiled:
         refuse_probability(c)
-    groups: dict[str, list] = {}
-    for c in compiled:
-        groups.setdefault(c.entry.source, []).append(c)
+    groups = by_source(compiled)
     stems = file_stems(groups)
     out: dict[str, str] = {}
     for source, items in groups.items():

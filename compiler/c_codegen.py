@@ -31,7 +31,7 @@ from typing import TYPE_CHECKING
 from fretc.compiler import ir
 from fretc.compiler.automata import LTL3Automata, ltl3_automata
 from fretc.compiler.c_step import HELPERS, CField, CStep, c_string, compile_c_nodes
-from fretc.compiler.codegen import _env, file_stems
+from fretc.compiler.codegen import _env, by_source, file_stems
 from fretc.compiler.ir import Node
 from fretc.compiler.printers import to_smv
 from fretc.compiler.pt_step import CodegenError, check_monitorable
@@ -354,9 +354,7 @@ def c_units(compiled: Sequence[Compiled], split: bool = False, automata: dict | 
     ``two/safe.fret``; a case-insensitive file system, and the include guards in upper
     case), and every C identifier of every monitor (``a.fret``'s ``b_c`` and ``a_b.fret``'s
     ``c`` would both be ``a_b_c``)."""
-    groups: dict[str, list] = {}
-    for c in compiled:
-        groups.setdefault(c.entry.source, []).append(c)
+    groups = by_source(compiled)
     stems = file_stems(groups)
     files: set[str] = {"runner"}  # file stems taken, case-folded (runner.c is the runner's)
     idents: set[str] = set()  # identifiers taken by the monitors so far

@@ -554,6 +554,15 @@ def encode_table(table: list[list[int]]) -> str:
     return ";".join(",".join(map(str, row)) for row in table)
 
 
+def by_source(compiled: Iterable[Any]) -> dict[str, list]:
+    """The compiled requirements grouped by their file (``entry.source``), files and
+    requirements in input order: one generated output a file."""
+    groups: dict[str, list] = {}
+    for c in compiled:
+        groups.setdefault(c.entry.source, []).append(c)
+    return groups
+
+
 def file_stems(sources: Iterable[str], suffix: str = "") -> dict[str, str]:
     """A distinct Python-identifier stem per requirement file, in order: the file name's
     stem (``requirements/r1.fret`` -> ``r1`` + ``suffix``), with ``_2``, ``_3`` ... added when
@@ -581,9 +590,7 @@ def build_monitor_modules(compiled: Sequence[Compiled], errors: list | None = No
     requirements concerned being listed in ``SKIPPED`` (see :func:`build_monitor_module`).
     Each requirement's automata are built once (and shared through the disk cache by
     requirements of the same shape)."""
-    groups: dict[str, list] = {}
-    for c in compiled:
-        groups.setdefault(c.entry.source, []).append(c)
+    groups = by_source(compiled)
     stems = file_stems(groups, "_monitors")
     return {source: build_monitor_module(items, stems[source], errors)
             for source, items in groups.items()}

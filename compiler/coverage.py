@@ -134,16 +134,6 @@ def _replace(e: A.Expr, key: str, by: A.Expr) -> A.Expr:
     return by if expr_text(e) == key else e
 
 
-def _field(req: A.Requirement, field: str) -> A.Expr | None:
-    if field == "scope":
-        return req.scope.mode if req.scope.kind != "null" else None
-    if field == "condition":
-        return req.condition.expr if req.condition.kind != "null" else None
-    if field == "stop":
-        return req.timing.stop if req.timing.kind in A.STOP_TIMINGS else None
-    return req.response
-
-
 def replace_atom(req: A.Requirement, field: str, atom: A.Expr, by: A.Expr) -> A.Requirement:
     """``req`` with ``atom`` replaced by ``by`` in one field (one of :data:`FIELDS`); the
     sentence's text is kept (the formulas are built from the fields)."""
@@ -175,7 +165,7 @@ _FIELD_WORDS = {"scope": "the scope's mode", "condition": "the condition",
 def _atom_obligations(rid: str, req: A.Requirement, ticks: int | None) -> list[Obligation]:
     out = []
     for field in FIELDS:
-        for atom in atoms_of(_field(req, field)):
+        for atom in atoms_of(req.field_expr(field)):
             text = expr_text(atom)
             where = _FIELD_WORDS[field]
             for value, sign in ((True, "+"), (False, "-")):

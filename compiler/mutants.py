@@ -32,16 +32,6 @@ _SCOPES = ("in", "notin", "before", "after", "onlyIn", "onlyAfter", "onlyBefore"
 _TIMINGS = ("immediately", "next", "eventually", "always", "never", "within", "for", "after")
 
 
-def _get(req: A.Requirement, field: str) -> A.Expr | None:
-    if field == "scope":
-        return req.scope.mode if req.scope.kind != "null" else None
-    if field == "condition":
-        return req.condition.expr if req.condition.kind != "null" else None
-    if field == "stop":
-        return req.timing.stop if req.timing.kind in A.STOP_TIMINGS else None
-    return req.response
-
-
 def _swaps(e: A.Expr) -> Iterator[A.Expr]:
     """``e`` with one ``&``/``|`` (boolean positions) swapped, each occurrence in turn."""
     if isinstance(e, A.Unary) and e.op == "!":
@@ -68,9 +58,9 @@ def _set(req: A.Requirement, field: str, e: A.Expr) -> A.Requirement:
 
 
 def _expression_mutants(req: A.Requirement) -> Iterator[tuple[str, A.Requirement]]:
-    every = [a for f in FIELDS for a in atoms_of(_get(req, f))]
+    every = [a for f in FIELDS for a in atoms_of(req.field_expr(f))]
     for field in FIELDS:
-        e = _get(req, field)
+        e = req.field_expr(field)
         for atom in atoms_of(e):
             text = expr_text(atom)
             yield (f"{field}: negate {text}",

@@ -20,7 +20,7 @@ from typing import TYPE_CHECKING
 
 from fretc.common.textsafe import one_line
 
-from fretc.compiler.codegen import file_stems
+from fretc.compiler.codegen import by_source, file_stems
 from fretc.compiler.pctl import PrismUnsupported, prism_property
 
 if TYPE_CHECKING:
@@ -35,9 +35,7 @@ def emit_prism(compiled: Sequence[Compiled],
     (:func:`fretc.compiler.codegen.file_stems`; written as ``STEM.props``). ``skipped``
     (when given) gets ``(file stem, requirement id, why)`` of each formalized requirement
     PRISM's properties cannot say."""
-    groups: dict[str, list] = {}
-    for c in compiled:
-        groups.setdefault(c.entry.source, []).append(c)
+    groups = by_source(compiled)
     stems = file_stems(groups)
     out: dict[str, str] = {}
     for source, items in groups.items():

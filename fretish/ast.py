@@ -250,6 +250,17 @@ class Requirement:
     component_span: Span = _span()
     response_span: Span = _span()
 
+    def field_expr(self, field: str) -> Expr | None:
+        """The expression of ``field`` (``scope``: the mode, ``condition``, ``stop``: the
+        timing's stop condition, else the response), None where the sentence has none."""
+        if field == "scope":
+            return self.scope.mode if self.scope.kind != "null" else None
+        if field == "condition":
+            return self.condition.expr if self.condition.kind != "null" else None
+        if field == "stop":
+            return self.timing.stop if self.timing.kind in STOP_TIMINGS else None
+        return self.response
+
     @property
     def key(self) -> str | None:
         """FRET's template key ``scope,condition,timing,satisfaction`` (FRET's ``semantics.json``
