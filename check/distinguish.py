@@ -109,18 +109,13 @@ def _domains(formulas) -> dict[str, list]:
     variable one value per region of its constants (midpoints, and one beyond each end)."""
     from fretc.check.numeric_abstraction import simple_comparison
 
+    kinds = _kinds(formulas)
     consts: dict[str, set] = {}
-    kinds: dict[str, str] = {}
     for f in formulas:
         for n in ir.walk(f):
-            if n.op == "ap":
-                kinds.setdefault(ir.name_of(n), "bool")
-            elif n.op == "var":
-                kinds[ir.name_of(n)] = "num"
-            elif n.op == "cmp":
-                sc = simple_comparison(n)
-                if sc is not None:
-                    consts.setdefault(sc[0], set()).add(sc[2])
+            sc = simple_comparison(n) if n.op == "cmp" else None
+            if sc is not None:
+                consts.setdefault(sc[0], set()).add(sc[2])
     out: dict[str, list] = {}
     for name in sorted(kinds):
         if kinds[name] == "bool":
