@@ -21,7 +21,7 @@ from fretc.monitors.definite import DefiniteStream, _RunMask, _Runs, definite_ev
 from fretc.monitors.interval import stream_unsupported
 
 from differential import BOOL_VARS, MODE_VARS, NUM_VARS, random_requirement
-from test_interval_stream import BOOL_TYPES, SIZES, named_ticks, time_of
+from test_interval_stream import named_ticks, random_chunks, time_of
 
 
 def _columns(rnd: random.Random, n: int) -> tuple[dict, dict, np.ndarray | None]:
@@ -52,18 +52,9 @@ def _check(text: str, rnd: random.Random, n: int) -> None:
     want, possible = definite_evidence(req, cols, unknown, n, None, True, stretch)
     s = DefiniteStream(req, None)
     times = time_of(np.arange(n, dtype=np.int64))
-    i = 0
-    while i < n:
-        k = min(rnd.choice(SIZES), n - i)
-        chunk = {}
-        for name, col in cols.items():
-            part = col[i:i + k]
-            if part.dtype == np.bool_:
-                part = part.astype(rnd.choice(BOOL_TYPES))
-            chunk[name] = part
+    for i, k, chunk in random_chunks(cols, n, rnd):
         s.feed(chunk, {v: m[i:i + k] for v, m in unknown.items()}, k, times[i:i + k],
                None if stretch is None else stretch[i:i + k])
-        i += k
     got, got_times = s.finish()
     assert got == want, f"{text}\n stream {got}\n whole  {want}"
     assert {t: got_times[t] for t in named_ticks(want)} == \

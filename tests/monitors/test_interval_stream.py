@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import random
 import tracemalloc
-from collections.abc import Mapping
+from collections.abc import Iterator, Mapping
 
 import numpy as np
 import pytest
@@ -60,13 +60,11 @@ def named_ticks(ev: Evidence) -> set[int]:
     return out
 
 
-def streamed(req: A.Requirement, ticks: int | None, cols: Mapping[str, np.ndarray], n: int,
-             rnd: random.Random, sizes: tuple[int, ...] = SIZES, retype: bool = True
-             ) -> tuple[Evidence, dict[int, int]]:
-    """The stream's evidence and times over ``cols`` split at random (``sizes``), each
-    boolean column of each chunk in a random type of :data:`BOOL_TYPES` (``retype``)."""
-    s = IntervalStream(req, ticks)
-    times = time_of(np.arange(n, dtype=np.int64))
+def random_chunks(cols: Mapping[str, np.ndarray], n: int, rnd: random.Random,
+                  sizes: tuple[int, ...] = SIZES, retype: bool = True
+                  ) -> Iterator[tuple[int, int, dict[str, np.ndarray]]]:
+    """``(first tick, ticks, chunk)`` of ``cols`` split at random (``sizes``), each boolean
+    column of each chunk in a random type of :data:`BOOL_TYPES` (``retype``)."""
     i = 0
     while i < n:
         k = min(rnd.choice(sizes), n - i)
@@ -76,8 +74,19 @@ def streamed(req: A.Requirement, ticks: int | None, cols: Mapping[str, np.ndarra
             if retype and part.dtype == np.bool_:
                 part = part.astype(rnd.choice(BOOL_TYPES))
             chunk[name] = part
-        s.feed(chunk, k, times[i:i + k])
+        yield i, k, chunk
         i += k
+
+
+def streamed(req: A.Requirement, ticks: int | None, cols: Mapping[str, np.ndarray], n: int,
+             rnd: random.Random, sizes: tuple[int, ...] = SIZES, retype: bool = True
+             ) -> tuple[Evidence, dict[int, int]]:
+    """The stream's evidence and times over ``cols`` split at random (``sizes``), each
+    boolean column of each chunk in a random type of :data:`BOOL_TYPES` (``retype``)."""
+    s = IntervalStream(req, ticks)
+    times = time_of(np.arange(n, dtype=np.int64))
+    for i, k, chunk in random_chunks(cols, n, rnd, sizes, retype):
+        s.feed(chunk, k, times[i:i + k])
     assert s.n == n
     return s.finish()
 
