@@ -11,6 +11,7 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
+import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from mcap.reader import make_reader
@@ -126,16 +127,22 @@ def test_a_window_meeting_a_gap_is_unknown_for_its_span(tmp_path):
     assert v["H"].unknown_ticks < want  # sample and hold is known from the next message
 
 
-def test_a_window_that_never_fills_is_named(tmp_path):
-    """``mean(x, 1e9 s)`` on a 10 s log: every tick is warm-up; the error said "the log has
-    no message on the bound topics" (it has 100): it names the window, its span and how much
-    of it the log gives."""
-    log = write_mcap(tmp_path / "w.mcap", [("/battery", "std_msgs/msg/Float64", S + k * 100 * MS,
-                                            float64(1.0)) for k in range(100)])
+@pytest.mark.parametrize("name, expression", [
+    ("mean_current", "mean(/x.data, 1e9 s)"), ("high", "count_ticks(/x.data > 1, 1e9 s)")])
+def test_a_window_that_never_fills_is_named(tmp_path, name, expression):
+    """``mean(x, 1e9 s)`` (a window over messages) and ``count_ticks(COND, 1e9 s)`` (over the
+    requirement's own ticks) on a 10 s log: every tick is warm-up; the error said "the log
+    has no message on the bound topics" (it has 100): it names the variable, the window and
+    that it never completes."""
+    log = write_mcap(tmp_path / "w.mcap", [("/x", "std_msgs/msg/Float64", S + k * 100 * MS,
+                                            float64(2.0)) for k in range(100)])
     la = audit_written(tmp_path, "w", "@tick_period 100 ms\n"
-                                      "MEAN: the robot shall always satisfy mean_current < 10\n",
+                                      f"W: the robot shall always satisfy {name} < 10\n",
                                       '[tick]\nperiod = "100 ms"\n[variables]\n'
-                                      'mean_current = "mean(/battery.data, 1e9 s)"\n', str(log))
+                                      f'{name} = "{expression}"\n', str(log))
     (v,) = la.verdicts
     assert v.verdict == "error" and "no message on the bound topics" not in v.error, v.error
-    assert "mean_current" in v.error and "never complete" in v.error, v.error
+    assert name in v.error and expression.split("(")[0] in v.error, v.error
+    assert "never complete" in v.error, v.error
+
+
