@@ -151,3 +151,18 @@ def keyed_monitors(responses: list[str], conditions: list[str]) -> list:
                                     condition=conditions[i % 3], n=i % 4), rid=f"K{i}")
         out.append((comp.formalization.pt, monitor_source(comp, i)))
     return out
+
+
+def fret_export(requirements: dict[str, str], *variables: tuple, component: str = "ctrl"
+                ) -> dict:
+    """A FRET project export (FRET's JSON fields) of ``component``: ``requirements`` id ->
+    FRETish text; ``variables`` as (name, idType, dataType), (name, idType, dataType,
+    assignment) or (name, idType, dataType, {more fields})."""
+    rows = []
+    for name, kind, dtype, *more in variables:
+        extra = more[0] if more and isinstance(more[0], dict) else (
+            {"assignment": more[0]} if more else {})
+        rows.append({"component_name": component, "variable_name": name, "idType": kind,
+                     "dataType": dtype, **extra})
+    return {"requirements": [{"reqid": k, "fulltext": t} for k, t in requirements.items()],
+            "variables": rows}

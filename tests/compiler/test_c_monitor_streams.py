@@ -27,7 +27,7 @@ from fretc.fretish.files import load_requirements
 from fretc.fretish.fret_variables import fret_declarations
 
 from _c_monitors import build, driver_source, needs_cc, run_driver, write
-from _monitor_helpers import load_source
+from _monitor_helpers import fret_export, load_source
 from test_monitor_streams import LMCPS, _ROW, _export, reference
 
 
@@ -120,22 +120,14 @@ MIXED = {
     "requirements": [
         {"reqid": "S1", "fulltext": "whenever seen c shall immediately satisfy half <= y + 3"},
         {"reqid": "S2", "fulltext": "c shall always satisfy big | d > 1"}],
-    "variables": [
-        {"component_name": "c", "variable_name": "x", "idType": "Input",
-         "dataType": "boolean"},
-        {"component_name": "c", "variable_name": "y", "idType": "Input", "dataType": "double"},
-        {"component_name": "c", "variable_name": "d", "idType": "Internal", "dataType": "",
-         "assignment": "y -> pre (pre d) + 1.0"},
-        {"component_name": "c", "variable_name": "seen", "idType": "Internal",
-         "dataType": "boolean", "assignment": "x -> (x or pre seen)"},
-        {"component_name": "c", "variable_name": "half", "idType": "Internal",
-         "dataType": "", "assignment": "if seen then d / 2.0 else d mod 2.0"},
-        {"component_name": "c", "variable_name": "a", "idType": "Internal",
-         "dataType": "boolean", "assignment": "false -> pre b"},
-        {"component_name": "c", "variable_name": "b", "idType": "Internal",
-         "dataType": "boolean", "assignment": "x and not a"},
-        {"component_name": "c", "variable_name": "big", "idType": "Internal",
-         "dataType": "boolean", "assignment": "a or y > 2.0"}]}
+    "variables": fret_export({}, ("x", "Input", "boolean"), ("y", "Input", "double"),
+                             ("d", "Internal", "", "y -> pre (pre d) + 1.0"),
+                             ("seen", "Internal", "boolean", "x -> (x or pre seen)"),
+                             ("half", "Internal", "", "if seen then d / 2.0 else d mod 2.0"),
+                             ("a", "Internal", "boolean", "false -> pre b"),
+                             ("b", "Internal", "boolean", "x and not a"),
+                             ("big", "Internal", "boolean", "a or y > 2.0"),
+                             component="c")["variables"]}
 
 
 @pytest.fixture(scope="module")

@@ -16,18 +16,14 @@ from click.testing import CliRunner
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from _monitor_helpers import fret_export
 from fretc.cli import main
 
-_VARIABLES = [
-    {"component_name": "ctrl", "variable_name": "a", "idType": "Input", "dataType": "boolean"},
-    {"component_name": "ctrl", "variable_name": "o", "idType": "Output", "dataType": "boolean"},
-    {"component_name": "ctrl", "variable_name": "rise", "idType": "Internal",
-     "dataType": "boolean", "assignment": "a and not pre a"},
-    {"component_name": "ctrl", "variable_name": "seen", "idType": "Internal",
-     "dataType": "boolean", "assignment": "a -> (a or pre seen)"},
-    {"component_name": "ctrl", "variable_name": "toggle", "idType": "Internal",
-     "dataType": "boolean", "assignment": "false -> (a xor pre toggle)"},
-]
+_VARIABLES = fret_export({}, ("a", "Input", "boolean"), ("o", "Output", "boolean"),
+                         ("rise", "Internal", "boolean", "a and not pre a"),
+                         ("seen", "Internal", "boolean", "a -> (a or pre seen)"),
+                         ("toggle", "Internal", "boolean", "false -> (a xor pre toggle)")
+                         )["variables"]
 
 
 def _monitors(tmp: Path, text: str, emit: str = "monitor") -> tuple[dict, str]:

@@ -16,7 +16,7 @@ from click.testing import CliRunner
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from _monitor_helpers import autopilot_export
+from _monitor_helpers import autopilot_export, fret_export
 from fretc.cli import main
 
 LMCPS = Path(__file__).resolve().parents[3] / "shared/corpora/fret_projects/LMCPS/" \
@@ -108,16 +108,10 @@ def test_the_lmcps_export(tmp_path):
 
 
 def test_the_notes_say_why_each_is_a_stream(tmp_path):
-    doc = {"requirements": [{"reqid": "R1", "fulltext": "c shall always satisfy big"}],
-           "variables": [
-               {"component_name": "c", "variable_name": "x", "idType": "Input",
-                "dataType": "boolean"},
-               {"component_name": "c", "variable_name": "a", "idType": "Internal",
-                "dataType": "boolean", "assignment": "false -> pre b"},
-               {"component_name": "c", "variable_name": "b", "idType": "Internal",
-                "dataType": "boolean", "assignment": "x and not a"},
-               {"component_name": "c", "variable_name": "big", "idType": "Internal",
-                "dataType": "boolean", "assignment": "a or x"}]}
+    doc = fret_export({"R1": "c shall always satisfy big"}, ("x", "Input", "boolean"),
+                      ("a", "Internal", "boolean", "false -> pre b"),
+                      ("b", "Internal", "boolean", "x and not a"),
+                      ("big", "Internal", "boolean", "a or x"), component="c")
     (tmp_path / "p.json").write_text(json.dumps(doc), encoding="utf-8")
     got = CliRunner().invoke(main, [str(tmp_path / "p.json"), "--emit", "monitor", "-o",
                                     str(tmp_path / "m.py")])

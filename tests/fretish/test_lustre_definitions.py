@@ -18,6 +18,7 @@ from click.testing import CliRunner
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from _monitor_helpers import fret_export
 from fretc.cli import main
 from fretc.compiler import ir
 from fretc.compiler.evaluate import series
@@ -198,15 +199,6 @@ def test_a_cycle_without_pre_and_a_definition_too_deep_stay_free_with_the_reason
     assert "nested more than 200 levels deep" in defs.free["deeper"]
 
 
-def _export(requirements: dict[str, str], *variables: tuple) -> dict:
-    """A FRET project export of component ``ctrl``: ``variables`` as (name, idType,
-    dataType) or (name, idType, dataType, {extra fields})."""
-    rows = [{"component_name": "ctrl", "variable_name": v[0], "idType": v[1],
-             "dataType": v[2], **(v[3] if len(v) > 3 else {})} for v in variables]
-    return {"requirements": [{"reqid": k, "fulltext": t} for k, t in requirements.items()],
-            "variables": rows}
-
-
 def _check(path, doc: dict, *options: str):
     """``fretc check`` of ``doc`` written to ``path`` (the click result)."""
     path.write_text(json.dumps(doc), encoding="utf-8")
@@ -216,7 +208,7 @@ def _check(path, doc: dict, *options: str):
 def test_a_deep_definition_is_no_internal_error_in_monitors_or_check(tmp_path):
     """A FRET export whose definition is a chain of 3,000 ``and``: ``--emit monitor`` and
     ``check`` read the variable as free (a note says why), exit 0/2, never 4."""
-    doc = _export({"R1": "whenever d ctrl shall immediately satisfy o"},
+    doc = fret_export({"R1": "whenever d ctrl shall immediately satisfy o"},
                   ("a", "Input", "boolean"), ("o", "Output", "boolean"),
                   ("d", "Internal", "boolean", {"assignment": " and ".join(["a"] * 3000)}))
     path = tmp_path / "p.json"
@@ -232,7 +224,7 @@ def test_check_reads_an_internal_variable_as_its_definition(tmp_path):
     """``hold`` is Internal, ``a and not b``: realizability is decided over the Inputs a, b
     (before, ``hold`` was a free variable declared neither input nor output: exit 2), and
     the note says the definition is used."""
-    doc = _export({"R1": "whenever hold ctrl shall immediately satisfy o",
+    doc = fret_export({"R1": "whenever hold ctrl shall immediately satisfy o",
                    "R2": "whenever b ctrl shall immediately satisfy !o"},
                   ("a", "Input", "boolean"), ("b", "Input", "boolean"),
                   ("o", "Output", "boolean"),
@@ -254,7 +246,7 @@ def test_a_mode_is_its_mode_requirement(tmp_path):
     """A Mode with FRET's mode requirement (a FRETish condition) is that condition: ``in
     cruise mode`` holds where ``speed > 10``; without a requirement it stays a free variable,
     declared neither input nor output (exit 2)."""
-    doc = _export({"M1": "in cruise mode ctrl shall always satisfy o",
+    doc = fret_export({"M1": "in cruise mode ctrl shall always satisfy o",
                    "M2": "whenever speed <= 10 ctrl shall immediately satisfy !o"},
                   ("speed", "Input", "double"), ("o", "Output", "boolean"),
                   ("cruise", "Mode", "boolean", {"modeRequirement": "speed > 10"}))
