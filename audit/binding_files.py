@@ -73,13 +73,38 @@ def load_audit_bindings(config: AuditConfig, files: list[tuple[Path, Bindings]] 
                 tick = dataclasses.replace(tick, nan=b.tick.nan, inf=b.tick.inf)
             b = Bindings(dict(b.variables), tick or b.tick, config.time_base or b.time_base,
                          b.header_lag_ns, b.source, types=dict(b.types), entities=b.entities,
-                         per_entity=b.per_entity, path_vars=b.path_vars)
+                         per_entity=b.per_entity, path_vars=b.path_vars,
+                         allowance=dict(b.allowance))
         if config.inline:
             try:
                 b = b.with_inline(config.inline)
             except BindingError as exc:
                 raise AuditInputError(str(exc)) from None
-    return b, [str(f) for f, _b in files]
+    return _with_allowance(b, config), [str(f) for f, _b in files]
+
+
+def _with_allowance(b: Bindings | None, config: AuditConfig) -> Bindings | None:
+    """``b`` with ``--allowance`` over its files' ``[audit] allowance``, topic by topic.
+
+    Raises:
+        AuditInputError: ``--allowance`` without bindings, or naming a topic no binding
+            reads (the option named)."""
+    if not config.allowance:
+        return b
+    if b is None:
+        raise AuditInputError("--allowance needs signal bindings: a CSV trace read without "
+                              "them has no topics to read earlier")
+    read = b.log_topics_read()
+    for topic, _ns in config.allowance:
+        if topic not in read:
+            raise AuditInputError(
+                f"--allowance {topic}: no binding reads the topic {topic} (the bindings "
+                f"read {', '.join(sorted(read)) or 'no topic'})")
+    b = dataclasses.replace(b)  # (a copy: the bindings as read stay as they were)
+    given = {**b.allowance, **dict(config.allowance)}
+    # (an allowance of 0 is none: the audit reads and writes what it does without one)
+    b.allowance = {t: ns for t, ns in sorted(given.items()) if ns}
+    return b
 
 
 def merge_bindings(parts: list[Bindings]) -> Bindings:
@@ -91,6 +116,7 @@ def merge_bindings(parts: list[Bindings]) -> Bindings:
     entities: dict = {}
     per_entity: dict = {}
     path_vars: dict = {}
+    allowance: dict[str, int] = {}
     for b in parts:
         entities.update(b.entities)
         per_entity.update(b.per_entity)
@@ -99,6 +125,12 @@ def merge_bindings(parts: list[Bindings]) -> Bindings:
             if types.setdefault(topic, name) != name:
                 raise AuditInputError(f"{b.source}: [types] gives {topic} the type {name}, "
                                       f"another binding file {types[topic]}")
+        for topic, ns in b.allowance.items():
+            if allowance.setdefault(topic, ns) != ns:
+                raise AuditInputError(
+                    f"{b.source}: [audit] allowance gives {topic} {format_ns(ns) if ns else 0}"
+                    f", another binding file {format_ns(allowance[topic])}; one audit reads "
+                    "a topic with one allowance")
         if (b.tick, b.time_base, b.header_lag_ns) != (first.tick, first.time_base,
                                                         first.header_lag_ns):
             raise AuditInputError(
@@ -114,7 +146,8 @@ def merge_bindings(parts: list[Bindings]) -> Bindings:
             variables.setdefault(name, v)
     source = ", ".join(str(b.source) for b in parts)
     return Bindings(variables, first.tick, first.time_base, first.header_lag_ns, source,
-                    types=types, entities=entities, per_entity=per_entity, path_vars=path_vars)
+                    types=types, entities=entities, per_entity=per_entity, path_vars=path_vars,
+                    allowance=allowance)
 
 
 def tick_text(tick: TickSpec) -> str:

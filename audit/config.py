@@ -37,6 +37,9 @@ class AuditConfig:
         max_entities: ``--max-entities``: entities of one per-entity requirement judged per
             log (None: :data:`fretc.audit.entities.log.DEFAULT_MAX_ENTITIES`); past it, an error
             verdict says how to raise it.
+        allowance: ``--allowance TOPIC=DURATION``: topic -> ns its messages are read
+            earlier (a reaction allowance, :mod:`fretc.logs.allowance`), over the binding
+            files' ``[audit] allowance`` for the same topic; ``()`` none.
     """
 
     requirements: tuple[str, ...]
@@ -51,4 +54,5 @@ class AuditConfig:
     text_attribute: str | None = None
     bridge_gaps_ns: int | None = None
     max_entities: int | None = None
+    allowance: tuple[tuple[str, int], ...] = ()
 

@@ -29,6 +29,7 @@ from fretc.common.collections_gc import fewer_full_collections
 from fretc.audit.verdict import LogAudit, Verdict
 from fretc.logs.schema import closest
 from fretc.logs import open_log
+from fretc.logs.allowance import with_allowance
 from fretc.logs.csv.clocks import split_clocks
 from fretc.logs.csv.source import CsvSource, sampled_header, sampled_trace
 from fretc.audit.checks import (binding_type_errors, call_hint, check_nominal_rate, csv_bindings,
@@ -248,6 +249,14 @@ class _LogRun:
             return self._fail_log(f"{path}: {exc}", "log not audited: ")
         la.kind = source.kind
         bindings = plan.bindings
+        if bindings is not None and any(bindings.allowance.values()):
+            if source.kind == "csv":
+                return self._fail_log(f"{path}: an allowance (--allowance, [audit] allowance) "
+                                      "reads topics of a log earlier; a CSV trace's rows are "
+                                      "one clock", "log not audited: ")
+            self.source = source = with_allowance(source, bindings.allowance)
+        if bindings is not None and bindings.allowance:
+            la.allowance_ns = dict(sorted(bindings.allowance.items()))
         if source.kind == "csv":
             # the same binding rules as any log (docs/guide/ticks.md "CSV traces"): with bindings, bound
             # variables are their expressions over /csv.<column> (a missing topic or column

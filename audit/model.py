@@ -202,6 +202,8 @@ class AuditPlan:
         if b.tick.inf != "unread":  # and its ±inf policy ([tick] inf)
             tick["inf"] = b.tick.inf
         return {"sources": self.binding_files, "tick": tick, "time_base": b.time_base,
+                **({"allowance_ns": dict(sorted(b.allowance.items()))} if b.allowance
+                   else {}),
                 "variables": {n: {"expr": v.expr, "source": v.source, "line": v.line,
                                   "topics": sorted(v.topics)}
                               for n, v in b.variables.items()}}

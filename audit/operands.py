@@ -10,6 +10,7 @@ from fretc.monitors.stepwise import to_python
 from fretc.common.problems import LogError, SignalError
 from fretc.signals import sample_blocks
 from fretc.logs import open_log
+from fretc.logs.allowance import with_allowance
 from fretc.audit.model import AuditPlan
 from fretc.audit.passes import ClockKey, clock_key
 
@@ -48,8 +49,9 @@ def operand_values(path: str, plan: AuditPlan, bindings: Bindings,
                             bindings.time_base, bindings.header_lag_ns, bindings.source)
     got: dict[tuple[ClockKey, str], dict[int, object]] = {}
     try:
-        source = (first.reopen() if first is not None else None) or open_log(
-            path, csv_period_ns=plan.csv_period_ns, msg_path=plan.config.msg_path)
+        source = (first.reopen() if first is not None else None) or with_allowance(open_log(
+            path, csv_period_ns=plan.csv_period_ns, msg_path=plan.config.msg_path),
+            plan.bindings.allowance if plan.bindings is not None else None)
         done: set[ClockKey] = set()
         blocks = iter(sample_blocks(source, aux_bindings, groups,
                                     _last_time(needs, passes, verdicts)))

@@ -17,6 +17,7 @@ import numpy as np
 
 from fretc.audit.columns import TickColumns
 from fretc.logs import open_log
+from fretc.logs.allowance import with_allowance
 from fretc.signals import sample_blocks
 from fretc.audit.gaps import gaps_of_clock
 from fretc.audit.streamed import (RequirementStreams, StreamedResult, feed_streams,
@@ -357,8 +358,9 @@ def pick_ticks(plan: AuditPlan, path: str, first: LogSource | None, bindings: Bi
 
     Raises:
         LogError, SignalError, OSError: the log cannot be read again as it was."""
-    source = (first.reopen() if first is not None else None) or open_log(
-        path, csv_period_ns=plan.csv_period_ns, msg_path=plan.config.msg_path)
+    source = (first.reopen() if first is not None else None) or with_allowance(open_log(
+        path, csv_period_ns=plan.csv_period_ns, msg_path=plan.config.msg_path),
+        plan.bindings.allowance if plan.bindings is not None else None)
     taker = LogStreams(pick=pick)
     last = {key: max(ticks) for key, ticks in pick.items()}
     done: set[ClockKey] = set()

@@ -352,6 +352,10 @@ class LogAudit:
         integrity: why a changed byte of the log would read as data (a format or a file
             without checksums: :meth:`fretc.logs.base.LogSource.integrity_note`), None when
             every byte read was checked.
+        allowance_ns: the reaction allowance it was read with (``--allowance``, ``[audit]
+            allowance``: topic -> ns its messages were read earlier, :mod:`fretc.logs.allowance`);
+            empty: none. In the JSON (``allowance_ns``, and in each first violation) only
+            when given, so that a verdict is never read without it.
     """
 
     log: str
@@ -379,6 +383,7 @@ class LogAudit:
     gaps: list[dict[str, Any]] = field(default_factory=list)
     cut_time_ns: int | None = None
     integrity: str | None = None
+    allowance_ns: dict[str, int] = field(default_factory=dict)
 
     def to_json(self) -> dict:
         """The log's audit as the audit JSON gives it (``docs/reference/audit.schema.json``)."""
@@ -390,7 +395,10 @@ class LogAudit:
         """The verdicts as :meth:`to_json` gives them, one at a time."""
         st, base = self.start_time_ns, self.time_base
         for v in self.verdicts:
-            yield v.to_json(st, base)
+            out = v.to_json(st, base)
+            if self.allowance_ns and out.get("first_violation"):
+                out["first_violation"]["allowance_ns"] = dict(self.allowance_ns)
+            yield out
 
     def head_json(self) -> dict:
         """:meth:`to_json` but for its ``verdicts``."""
@@ -414,6 +422,7 @@ class LogAudit:
                      for g in self.gaps],
             "cut_time_ns": self.cut_time_ns, "cut_time_s": _t(self.cut_time_ns, st)["s"],
             "integrity": self.integrity,
+            **({"allowance_ns": dict(self.allowance_ns)} if self.allowance_ns else {}),
         }
 
 

@@ -22,6 +22,7 @@ from rich.text import Text
 from fretc.common.textsafe import terminal_text
 from fretc.common.problems import RECORDED_GAPS
 from fretc.common.units import format_offset
+from fretc.logs.allowance import allowance_text
 from fretc.logs.recorded_gaps import LEFT_FOR_GOOD, RUN_END
 
 from fretc.audit.verdict import LogAudit, Verdict, exit_code, incomplete
@@ -197,6 +198,8 @@ def _print_plan(console, plan, n_logs: int | None, command: str = "fretc audit")
             tick += ", ±inf read as numbers"
         clock = f"bindings {', '.join(plan.binding_files) or '--bind'} ({tick}, " \
                 f"{b.time_base} time)"
+        if b.allowance:  # (a reaction allowance: the verdicts are read with it)
+            clock += f"; allowance: {allowance_text(b.allowance)}"
     what = _plural(len(plan.requirements), "requirement")
     what += "" if n_logs is None else f", {_plural(n_logs, 'log')}"
     console.print(f"{command}: {what}; {clock}", markup=False)
@@ -431,6 +434,10 @@ def _violation_text(la: LogAudit, v: Verdict, tool_id: str | None = None,
           if fv.at.log_time_ns is not None else "")
     lines.append(f"  {terminal_text(fv.reason)}; missed at tick {fv.at.tick} "
                  f"({format_offset(fv.at.time_ns, st)} on the {clock}{lt})")
+    if la.allowance_ns:
+        lines.append(f"  read with the allowance: {allowance_text(la.allowance_ns)} (an answer "
+                     "seen within it after a tick is judged at that tick; times of those "
+                     "topics are their log times less it)")
     if v.triggers is not None and v.violations:
         lines.append(f"  {v.violations} of {v.triggers} triggers failed")
     head.append("\n".join(lines))

@@ -9,6 +9,7 @@ import json
 from typing import Any
 
 from fretc.common.units import format_offset, format_seconds
+from fretc.logs.allowance import allowance_text
 
 __all__ = ["verdict_for", "cell_label", "witness", "values_table", "format_value"]
 
@@ -70,6 +71,9 @@ def _violation_facts(fv: dict, start_ns: int | None) -> list[tuple[str, str]]:
     out.append(("first violation", f"tick {fv['tick']} at {format_seconds(tick_s)} on the {base} "
                                     "clock" + (f" (deciding message at {decided} on the log "
                                                "clock)" if decided and base != "log" else "")))
+    if fv.get("allowance_ns"):  # (read with a reaction allowance: never shown without it)
+        out.append(("allowance", allowance_text(fv["allowance_ns"]) + " (an answer seen "
+                    "within it after a tick is judged at that tick)"))
     t = fv.get("trigger")
     if t:
         out.append(("trigger", f"tick {t['tick']} at {format_seconds(t.get('time_s'))}"))

@@ -39,6 +39,7 @@ from fretc.audit.verdict import LogAudit, Verdict
 from fretc.common.problems import FretcInputError
 from fretc.common.streams import base_topic, log_topics
 from fretc.logs import open_log
+from fretc.logs.allowance import with_allowance
 from fretc.signals.bindings import Bindings
 from fretc.signals.bindings.expression import TF_TOPICS, EntityParam
 
@@ -153,7 +154,9 @@ class _Entities:
         """Every per-entity requirement's verdicts, in ``rs`` order."""
         out: dict[int, list[Verdict]] = {}
         try:
-            source = open_log(self.path, msg_path=self.plan.config.msg_path)
+            b = self.plan.bindings
+            source = with_allowance(open_log(self.path, msg_path=self.plan.config.msg_path),
+                                    b.allowance if b is not None else None)
             available = source.topics()
         except (FretcInputError, OSError) as exc:
             return [v for r in rs for v in self.alone(r, "error", error=f"{NOT_AUDITED}{exc}")]
@@ -259,6 +262,8 @@ class _Entities:
             la.tick = ({"period_ns": b.tick.period_ns} if b.tick.period_ns
                        else {"topic": b.tick.topic})
             la.time_base = b.time_base
+        if self.plan.bindings is not None and self.plan.bindings.allowance:
+            la.allowance_ns = dict(sorted(self.plan.bindings.allowance.items()))
 
 
 def _key_topics(bindings: Bindings, name: str) -> frozenset[str]:

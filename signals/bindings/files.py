@@ -100,13 +100,13 @@ def _load_toml(text: str, source: str) -> dict[str, Any]:
 def _check_tables(doc: dict[str, Any], source: str, loc: _Locations) -> None:
     for key in doc:
         if key not in ("tick", "variables", "logs", "types", "constants", "path_variables",
-                       "entities", "shield"):
+                       "entities", "shield", "audit"):
             table = isinstance(doc[key], dict)
             line, col = loc.at(key) if table else loc.at("", key)
             what = f"table [{key}]" if table else f"key {key!r}"
             raise BindingError(source, f"unknown {what} (expected [tick], [variables] and "
                                "optionally [logs], [types], [constants], [path_variables], "
-                               "[entities], [shield])",
+                               "[entities], [shield], [audit])",
                                line=line, col=col)
 
 
@@ -333,6 +333,7 @@ def parse_bindings(text: str, source: str = "<bindings>") -> Bindings:
     out.types = _types_table(doc.get("types"), source, loc)
     out.msg_path = _msg_path(doc.get("types"), source, loc)
     out.constants = _constants(doc.get("constants"), source, loc)
+    out.allowance = _audit_table(doc.get("audit"), source, loc, out)
     return out
 
 
@@ -445,6 +446,54 @@ def _constants(table: Any, source: str, loc: _Locations) -> dict[str, tuple[str,
             out[name] = parse_constant(value)
         except ValueError as exc:
             raise BindingError(source, f"[constants] {name}: {exc}", line=line,
+                               col=col) from None
+    return out
+
+
+def _audit_table(table: Any, source: str, loc: _Locations, bindings: Bindings
+                 ) -> dict[str, int]:
+    """``[audit] allowance = {"/cmd_vel_filtered" = "120 ms"}``: topic -> ns its messages
+    are read earlier by the audit (:mod:`fretc.logs.allowance`); ``{}`` without it.
+
+    Raises:
+        BindingError: not a table, an unknown key, an allowance that is not a table of
+            topics to durations, a negative or malformed duration, or a topic no binding
+            of this file reads (:meth:`Bindings.log_topics_read`); at the
+            entry."""
+    from fretc.logs.allowance import parse_allowance
+
+    if table is None:
+        return {}
+    if not isinstance(table, dict):
+        line, col = loc.at("", "audit")
+        raise BindingError(source, "audit must be a table: [audit] then allowance = "
+                           "{\"/cmd_vel_filtered\" = \"120 ms\"}", line=line, col=col)
+    for key in table:
+        if key != "allowance":
+            line, col = loc.at("audit", key)
+            raise BindingError(source, f"unknown key {key!r} in [audit] (allowance)",
+                               line=line, col=col)
+    line, col = loc.at("audit", "allowance")
+    given = table.get("allowance", {})
+    if not isinstance(given, dict):
+        raise BindingError(source, "[audit] allowance is a table of topics to durations, "
+                           "e.g. {\"/cmd_vel_filtered\" = \"120 ms\"}", line=line, col=col)
+    read = bindings.log_topics_read()
+    out: dict[str, int] = {}
+    for topic, value in given.items():
+        name = topic_name(topic)
+        try:
+            if name is None or not isinstance(value, str):
+                raise ValueError(f"{topic!r} = {value!r}: a topic name and a duration in "
+                                 "quotes, e.g. \"/cmd_vel_filtered\" = \"120 ms\"")
+            if name not in read:
+                raise ValueError(f"no binding of this file reads {name} (it reads "
+                                 f"{', '.join(sorted(read)) or 'no topic'})")
+            ns = parse_allowance(value)
+            if ns:  # (0: none, as without the entry)
+                out[name] = ns
+        except ValueError as exc:
+            raise BindingError(source, f"[audit] allowance: {exc}", line=line,
                                col=col) from None
     return out
 

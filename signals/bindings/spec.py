@@ -173,6 +173,9 @@ class Bindings:
             variable, not compiled yet: name -> (expression, line, col, exact), compiled
             per entity by :meth:`for_entity`.
         path_vars: ``[path_variables]`` (FoxQL's ``$name`` values).
+        allowance: ``[audit] allowance``: topic -> ns its messages are read earlier by the
+            audit (a reaction allowance, :mod:`fretc.logs.allowance`; ``fretc audit
+            --allowance`` adds to it); empty: none.
 
     Raises:
         ValueError: a time base not in :data:`TIME_BASES`.
@@ -190,6 +193,7 @@ class Bindings:
     entities: dict[str, EntitySpec] = field(default_factory=dict, compare=False)
     per_entity: dict[str, tuple] = field(default_factory=dict, compare=False)
     path_vars: dict[str, object] = field(default_factory=dict, compare=False)
+    allowance: dict[str, int] = field(default_factory=dict, compare=False)
 
     def __post_init__(self) -> None:
         if self.time_base not in TIME_BASES:
@@ -202,6 +206,20 @@ class Bindings:
         out: set[str] = set()
         for b in self.variables.values():
             out |= b.topics
+        return frozenset(out)
+
+    def log_topics_read(self) -> frozenset[str]:
+        """The log topics these bindings read: their variables' (a stream's topic for the
+        stream), the tick topic, and those named in the per-entity expressions and
+        ``[entities]`` keys (not compiled yet) — the topics an allowance may name."""
+        from fretc.common.streams import log_topics
+
+        out = set(log_topics(self.topics))
+        if self.tick.topic is not None:
+            out.add(self.tick.topic)
+        texts = [p[0] for p in self.per_entity.values()] + [e.key for e in self.entities.values()]
+        for text in texts:
+            out |= {m.split(".", 1)[0] for m in re.findall(r"/[A-Za-z0-9_/.]+", str(text))}
         return frozenset(out)
 
     def for_entity(self, values: dict[str, object]) -> Bindings:
@@ -234,7 +252,7 @@ class Bindings:
                 refs=variables, nan=nan, inf=inf, path_vars=pvars, parsed=parsed.get(name))
         return Bindings(variables, self.tick, self.time_base, self.header_lag_ns, self.source,
                         types=dict(self.types), msg_path=self.msg_path,
-                        constants=self.constants)
+                        constants=self.constants, allowance=dict(self.allowance))
 
     def with_inline(self, specs: Iterable[str]) -> Bindings:
         """A copy with ``NAME=EXPR`` bindings (CLI ``--bind``) added or replacing same-named ones.
@@ -249,7 +267,8 @@ class Bindings:
         return Bindings(variables, self.tick, self.time_base, self.header_lag_ns, self.source,
                         types=dict(self.types), entities=self.entities,
                         per_entity={k: v for k, v in self.per_entity.items()
-                                    if k not in variables}, path_vars=self.path_vars)
+                                    if k not in variables}, path_vars=self.path_vars,
+                        allowance=dict(self.allowance))
 
 
 def make_bindings(variables: dict[str, str], tick: TickSpec, *, time_base: str = "log",

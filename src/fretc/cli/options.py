@@ -160,6 +160,7 @@ def audit_input_options(f: F, jobs: bool = True) -> F:
                      default=None,
                      help="Message time: log time (default), header.stamp, or header.stamp "
                           "where a message has a header and log time where it has none."),
+        ALLOWANCE_OPTION,
         click.option("-j", "--jobs", type=click.IntRange(min=1), default=1,
                      show_default=True, help="Audit this many logs in parallel processes."),
         click.option("--window", type=click.IntRange(min=0), default=5, show_default=True,
@@ -228,6 +229,59 @@ BRIDGE_GAPS_OPTION = click.option(
          "listed. Default: none (a gap's ticks are unknown).")
 
 
+#: Key of ``--allowance``'s values (topic -> ns) in the click context's ``meta``.
+ALLOWANCE_META = "fretc.allowance"
+
+
+def _store_allowance(ctx: click.Context, param: click.Parameter, values: tuple[str, ...]
+                     ) -> tuple[str, ...]:
+    """``--allowance TOPIC=DURATION`` (repeatable) -> ``ctx.meta[ALLOWANCE_META]`` (topic ->
+    ns, :func:`fretc.logs.allowance.parse_allowance`).
+
+    Raises:
+        click.BadParameter: no ``=``, a bad topic name, a negative or malformed duration,
+            one topic given two allowances (exit 2, the option named)."""
+    if not values:
+        return values
+    from fretc.logs.allowance import parse_allowance
+    from fretc.signals.bindings.paths import topic_name
+
+    got: dict[str, int] = {}
+    for value in values:
+        topic, eq, duration = value.partition("=")
+        name = topic_name(topic.strip())
+        try:
+            if not eq or name is None:
+                raise ValueError(f"{value!r} is not TOPIC=DURATION (e.g. "
+                                 "/cmd_vel_filtered=120ms)")
+            ns = parse_allowance(duration)
+        except ValueError as exc:
+            raise click.BadParameter(str(exc), ctx=ctx, param=param) from None
+        if got.setdefault(name, ns) != ns:
+            raise click.BadParameter(f"{name} is given two allowances", ctx=ctx, param=param)
+    ctx.meta[ALLOWANCE_META] = got
+    return values
+
+
+#: ``--allowance TOPIC=DURATION`` (repeatable): a topic read earlier (fretc.logs.allowance)
+ALLOWANCE_OPTION = click.option(
+    "--allowance", "allowance", multiple=True, metavar="TOPIC=DURATION", expose_value=False,
+    callback=_store_allowance,
+    help="Read the messages of TOPIC as if logged DURATION earlier (a reaction allowance: "
+         "a shield node's answers, seen on the bus up to its latency budget and a tick "
+         "after the tick they answer, judged at that tick), e.g. "
+         "--allowance /cmd_vel_filtered=120ms; repeatable. Over a binding file's [audit] "
+         "allowance. Stated in the summary and the JSON. Default: none.")
+
+
+def allowance() -> tuple[tuple[str, int], ...]:
+    """The running command's ``--allowance`` as (topic, ns) pairs, topics sorted (``()``:
+    not given)."""
+    ctx = click.get_current_context(silent=True)
+    got = ctx.meta.get(ALLOWANCE_META, {}) if ctx is not None else {}
+    return tuple(sorted(got.items()))
+
+
 #: Key of ``--max-entities``' value in the click context's ``meta``.
 MAX_ENTITIES_META = "fretc.max_entities"
 
@@ -272,7 +326,7 @@ def audit_config(requirements: tuple[str, ...], bindings: tuple[str, ...],
                        tick_period=tick_period, tick_topic=tick_topic, time_base=time_base,
                        window=window, msg_path=tuple(msg_path),
                        text_attribute=text_attribute(), bridge_gaps_ns=bridge_gaps(),
-                       max_entities=_max_entities())
+                       max_entities=_max_entities(), allowance=allowance())
 
 
 def _max_entities() -> int | None:
