@@ -135,23 +135,27 @@ def test_proposals_pass_at_the_controllers_rate_and_a_dead_controller_gets_a_sto
 
 
 def _audit_with_the_allowance(tmp_path: Path, mcap: Path) -> None:
-    """The recorded graph audited with the node's reaction allowance: the proposal timeout
-    (300 ms) as the command's age, then a tick and the latency budget (120 ms: 2 ticks) for
-    the stop to reach a reader; and S1..S3 as the node enforced them."""
+    """The recorded graph audited with the node's reaction allowance (``--allowance
+    /cmd_vel_filtered=120ms``: a tick and the latency budget, the answers read that much
+    earlier) and the rule as it is stated: once the command is older than the proposal
+    timeout (300 ms), the output is the stop at once; and S1..S3 as the node enforced them."""
     reqs = tmp_path / "chain.fret"
     reqs.write_text("@tick_period 100 ms\n"
-                    "T1: whenever cmd_silent collision_monitor shall within 2 ticks "
+                    "T1: whenever cmd_silent collision_monitor shall immediately "
                     "satisfy stopped\n", encoding="utf-8")
     bindings = tmp_path / "chain.bindings.toml"
     bindings.write_text('[tick]\nperiod = "100 ms"\ntime = "log"\n[variables]\n'
-                        'cmd_silent = "age(/cmd_vel) > 0.3"\n'
+                        f'cmd_silent = "age(/cmd_vel) > {TIMEOUT_MS / 1000}"\n'
                         'stopped = "abs(/cmd_vel_filtered.linear.x) < 1e-9"\n',
                         encoding="utf-8")
     speed = REPO / "requirements" / "shield" / "speed_separation"
+    allowance = f"/cmd_vel_filtered={TICK_MS + BUDGET_MS}ms"
     got = CliRunner().invoke(main, ["audit", "-r", str(speed.with_suffix(".fret")), "-r",
                                     str(reqs), "-b", str(speed) + ".bindings.toml", "-b",
-                                    str(bindings), str(mcap)])
+                                    str(bindings), "--allowance", allowance, str(mcap)])
     assert got.exit_code == 0 and "0 violated" in got.output, got.output  # S1..S3, T1
+    assert "allowance: /cmd_vel_filtered read 120 ms earlier" in " ".join(
+        got.output.split()), got.output
 
 
 @pytest.mark.tor("TOR-SHD-005")
