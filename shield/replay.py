@@ -133,7 +133,9 @@ class ReplayResult:
     ``written_counts`` messages written per topic, ``problems`` the log's data problems
     (text), ``damage`` the recording's damage (None: none; else ``damage_time_ns``, the
     exclusive end of the span replayed, None when the damage lost no message, and
-    ``problems``, the readers' words)."""
+    ``problems``, the readers' words); ``faults`` the ticks at which an input of the shield
+    could not be read, ``unanswered`` those of them at which the shield published nothing
+    (an input it could not decide on and no fallback; :attr:`answered`)."""
 
     log: str
     written: str
@@ -154,6 +156,15 @@ class ReplayResult:
     written_counts: dict[str, int] = field(default_factory=dict)
     problems: list[str] = field(default_factory=list)
     damage: dict[str, Any] | None = None
+    faults: Span = field(default_factory=Span)
+    unanswered: Span = field(default_factory=Span)
+
+    @property
+    def answered(self) -> int:
+        """The fault ticks the shield answered: its fallback, or outputs safe for every
+        value the unread input could have had, published (:class:`~fretc.shield.runtime.
+        Decision` ``fault`` naming the input)."""
+        return self.faults.ticks - self.unanswered.ticks
 
     def as_json(self) -> dict[str, Any]:
         """The result as JSON data (log times in ns)."""
@@ -169,7 +180,9 @@ class ReplayResult:
                 "published": dict(self.published), "recorded_kept_as": dict(self.renamed),
                 "own_proposals": list(self.own_proposals),
                 "written": dict(self.written_counts), "log_problems": list(self.problems),
-                "damage": None if self.damage is None else dict(self.damage)}
+                "damage": None if self.damage is None else dict(self.damage),
+                "faults": {**self.faults.as_json(), "answered": self.answered,
+                           "unanswered": self.unanswered.as_json()}}
 
 
 def shielded_name(log: str | os.PathLike[str]) -> str:
@@ -383,6 +396,9 @@ def _decide(shield: MessageShield, t: int, result: ReplayResult
         d, msgs = shield.tick(t)
     except ShieldInputError as exc:
         result.silent.add(t, str(exc))
+        if str(exc).startswith("input "):  # (an unread input, and nothing published)
+            result.faults.add(t, str(exc))
+            result.unanswered.add(t, str(exc))
         return []
     except Exception as exc:  # noqa: BLE001 - the node's rule: the state back, the fallback
         why = f"the shield's messages not made: {type(exc).__name__}: {exc}"
@@ -396,8 +412,9 @@ def _decide(shield: MessageShield, t: int, result: ReplayResult
     fault = getattr(d, "fault", "")
     for a in getattr(d, "broken", ()):
         result.broken.setdefault(a, t)
-    if fault.startswith("input "):
+    if fault.startswith("input "):  # (answered: the decision for every value, published)
         result.input_faults.add(t, fault)
+        result.faults.add(t, fault)
     elif fault:
         result.proposal_faults.add(t, fault)
     if d.overridden:

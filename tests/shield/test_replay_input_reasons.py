@@ -37,7 +37,7 @@ def replay_faults(tmp_path: Path, bad: float, expr: str = "/x.data",
     got = CliRunner().invoke(main, ["shield-replay", str(tmp_path / "sh"),
                                     str(tmp_path / "rec.mcap"), "-o", str(tmp_path / "out"),
                                     "--json", str(tmp_path / "replay.json")])
-    assert got.exit_code in (0, 1, 3), got.output
+    assert got.exit_code in (0, 1, 3, 6), got.output  # (6: every fault answered)
     return json.loads((tmp_path / "replay.json").read_text())["runs"][0]["input_faults"]
 
 

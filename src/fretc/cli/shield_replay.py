@@ -9,9 +9,11 @@ For each log, writes ``DIR/NAME.shielded.mcap`` (every recorded message as it wa
 shield's corrected outputs added on their topics at each tick), prints the overrides per
 requirement and the audit of the shielded run. Exit status: the audit's of the shielded
 runs (0 every verdict satisfied or vacuous, 1 a requirement violated, 3 a log partial or
-with data problems, an unknown verdict, a recording damaged even where no message was lost);
-2 input errors (the folder, a log, a topic, a log time named; a recording damaged before any
-message the shield reads).
+with data problems, an unknown verdict, a recording damaged even where no message was lost,
+a fault the shield did not answer); 2 input errors (the folder, a log, a topic, a log time
+named; a recording damaged before any message the shield reads); 6 no violation, and the
+audit's 3 is the faults' alone: ticks with an unreadable input, every one answered by the
+shield (:func:`faults_code`).
 """
 
 from __future__ import annotations
@@ -25,7 +27,7 @@ import click
 
 from fretc.cli.options import shown
 
-__all__ = ["shield_replay_cmd"]
+__all__ = ["shield_replay_cmd", "faults_code", "faults_text"]
 
 
 @click.command("shield-replay")
@@ -54,9 +56,20 @@ def shield_replay_cmd(ctx: click.Context, shield_dir: str, logs: tuple[str, ...]
       0  every verdict of the shielded runs satisfied or vacuous
       1  a requirement is violated in a shielded run
       2  usage or input error (the folder, a log, a topic or a log time named)
-      3  no violation, but a log is partial or had data problems, or a verdict
-         is unknown, or a recording replayed is damaged (damage replays the span
-         before it: the shielded run's audit is partial there)"""
+      3  no violation, but a fault the shield did not answer (a tick with an
+         unreadable input at which it published nothing), a verdict unknown, a
+         log partial or a recording replayed damaged (damage replays the span
+         before it: the shielded run's audit is partial there), or data problems
+         where no input of the shield was unreadable
+      6  no violation; the logs had faults (ticks with an unreadable input) and
+         the shield answered every one (its fallback, or outputs safe for every
+         value the input could have had); no verdict unknown, no log partial or
+         damaged (the audit's data problems are listed above it)
+
+    \b
+    Each log's summary ends with its faults: "faults: N ticks with an unreadable
+    input, N answered by the shield", and the first unanswered one's log time
+    (--json: "faults" per run)."""
     from fretc.common.outputs import output_folder, refuse_replacing_inputs
     from fretc.fretish.files import requirement_files
     from fretc.shield.replay import ReplayError, load_folder, replay_log, shielded_name
@@ -99,6 +112,9 @@ def shield_replay_cmd(ctx: click.Context, shield_dir: str, logs: tuple[str, ...]
         click.echo(shown(f"exit 3: {', '.join(whole)} is damaged, though every message in "
                          "it was replayed (fretc audit of it is partial)"),
                    err=json_path == "-")
+    code, why = faults_code(code, results, audits)
+    if why:
+        click.echo(shown(why), err=json_path == "-")
     if json_path:
         doc = {"shield": str(folder.module), "bindings": str(folder.bindings_file),
                "requirements": list(reqs),
@@ -157,7 +173,47 @@ def _overrides_text(r: Any) -> str:
     if others:
         lines.append(f"  the log's data problems: {len(others)} (fretc audit of the log "
                      f"lists them): {others[0]}")
+    lines.append("  " + faults_text(r))
     return "\n".join(lines)
+
+
+def faults_text(r: Any) -> str:
+    """The faults of one replay (a :class:`fretc.shield.replay.ReplayResult`) in one line:
+    the ticks with an unreadable input, how many the shield answered (its fallback, or
+    outputs safe for every value the input could have had, published), and the first
+    unanswered one's log time (ns) and reason."""
+    f, un = r.faults, r.unanswered
+    if not f.ticks:
+        return "faults: no tick with an unreadable input"
+    text = (f"faults: {_ticks(f.ticks)} with an unreadable input, {r.answered} answered by "
+            "the shield (its fallback, or outputs safe for every value the input could have "
+            "had)")
+    if un.ticks:
+        text += (f", {un.ticks} unanswered: the first at log time {un.first} ns "
+                 f"({_time(un.first, r.first_tick)} from the first tick; {un.why})")
+    return text
+
+
+def faults_code(code: int, results: list[Any], audits: list[Any]) -> tuple[int, str]:
+    """The exit code of the replays ``results`` (:class:`fretc.shield.replay.ReplayResult`)
+    whose shielded runs' audits (``audits``, :class:`fretc.audit.verdict.LogAudit`) exit
+    ``code``, with their faults told apart, and the line that says why it changed ("" when
+    it did not): 3 for a fault the shield did not answer where the audit found nothing
+    (0); 6 where the audit's 3 has no cause but the faults and the shield answered every one
+    (no verdict unknown, no log partial, no recording damaged)."""
+    faults = sum(r.faults.ticks for r in results)
+    unanswered = [r for r in results if r.unanswered.ticks]
+    if code == 0 and unanswered:
+        r = unanswered[0]
+        return 3, (f"exit 3: a fault the shield did not answer: {r.log} at log time "
+                   f"{r.unanswered.first} ns ({r.unanswered.why})")
+    if code != 3 or not faults or unanswered:
+        return code, ""
+    unknown = any(v.verdict == "unknown" for a in audits for v in a.verdicts)
+    if unknown or any(a.partial for a in audits) or any(r.damage for r in results):
+        return code, ""
+    return 6, (f"exit 6: no violation; the logs had faults ({_ticks(faults)} with an "
+               "unreadable input) and the shield answered every one")
 
 
 def _audit(requirements: tuple[str, ...], bindings_file: str, paths: list[str],
