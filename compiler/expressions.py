@@ -9,6 +9,9 @@ the response, condition, stop and scope expressions of a requirement.
 
 from __future__ import annotations
 
+from collections.abc import Callable
+from typing import NamedTuple
+
 from fretc.fretish import ast as A
 from fretc.fretish.fret_since import SINCE, stream_name
 from fretc.common.errors import FretishError
@@ -167,22 +170,9 @@ class Expander:
         a FRET stream monotone in its previous value, SINCE(a, c) = a S c over the whole
         trace, as Lustre computes it (:mod:`fretc.fretish.fret_since`).
         Endpoint-free forms inside scope conditions: H[m,n] p, O[m,n] p, Y((!p) S (p & q))."""
-        # same shape as _future_function below: FRET's past functions mirror its future ones (kept:
-        # other operators, H/O/S/Y here)
         name, args = e.name, e.args
         # Function expansions are built in a pt expander whatever the formula kind.
         px = Expander("pt", self.left_pt, self.right_ft, self.free)
-        left = self.left_pt
-        free = self.free
-        if name in ("persisted", "occurred"):
-            m, n, p = self._bounds(e, px)
-            if name == "persisted":
-                if free:
-                    return H(p, m, n)
-                return and_(H(p, m, n), H(not_(left), 0, n - 1))
-            if free:
-                return O(p, m, n)
-            return _since_bounded(not_(left), p, m, n)
         if name == "preBool":
             if len(args) != 2:
                 raise SemanticsError("preBool takes (initial value, p)", e.span)
@@ -195,15 +185,7 @@ class Expander:
             return or_(and_(FTP, ir.const(init.value)), and_(not_(FTP), Y(p)))
         if name == SINCE and len(args) == 2:  # (the trace's own since: no Left, no scope)
             return S(px.bool(args[0]), px.bool(args[1]))
-        if name == "prevOcc":
-            if len(args) != 2:
-                raise SemanticsError("prevOcc takes (p, q)", e.span)
-            p, q = px.bool(args[0]), px.bool(args[1])
-            if free:
-                return Y(S(not_(p), and_(p, q)))
-            guard = and_(not_(left), not_(p))
-            return or_(left, Y(implies(S(guard, p), S(guard, and_(p, q)))))
-        raise SemanticsError(f"unknown past-time function {name}", e.span)
+        return self._mirrored(e, _PAST)
 
     def _future_function(self, e: A.Call) -> Node:
         """FRET's future-time functions: persists(m,n,p) = G[m,n] p & G[0,n-1] !Right;
@@ -211,30 +193,35 @@ class Expander:
         nextOcc(p,q) = Right | X(((!p & !Right) U p) -> ((!p & !Right) U (p & q))).
         Endpoint-free forms inside scope conditions: G[m,n] p, F[m,n] p,
         X((!p) U (p & q))."""
-        # same shape as _past_function above: the future mirror (kept: other operators, G/F/U/X
-        # here)
+        return self._mirrored(e, _FUTURE)
+
+    def _mirrored(self, e: A.Call, mirror: _Mirror) -> Node:
+        """The functions FRET defines in both directions (persisted/persists,
+        occurred/occurs, prevOcc/nextOcc) with ``mirror``'s operators and end (Left, Right).
+        Raises :class:`SemanticsError` for another name or a wrong arity."""
         name, args = e.name, e.args
-        fx = Expander("ft", self.left_pt, self.right_ft, self.free)
-        right = self.right_ft
-        free = self.free
-        if name in ("persists", "occurs"):
-            m, n, p = self._bounds(e, fx)
-            if name == "persists":
-                if free:
-                    return G(p, m, n)
-                return and_(G(p, m, n), G(not_(right), 0, n - 1))
-            if free:
-                return F(p, m, n)
-            return _until_bounded(not_(right), p, m, n)
-        if name == "nextOcc":
+        x = Expander(mirror.kind, self.left_pt, self.right_ft, self.free)
+        end = self.left_pt if mirror.kind == "pt" else self.right_ft
+        hold_name, happen_name, occurrence_name = mirror.names
+        if name in (hold_name, happen_name):
+            lo, hi, p = self._bounds(e, x)
+            if name == hold_name:
+                if self.free:
+                    return mirror.hold(p, lo, hi)
+                return and_(mirror.hold(p, lo, hi), mirror.hold(not_(end), 0, hi - 1))
+            if self.free:
+                return mirror.happen(p, lo, hi)
+            return mirror.bounded(not_(end), p, lo, hi)
+        if name == occurrence_name:
             if len(args) != 2:
-                raise SemanticsError("nextOcc takes (p, q)", e.span)
-            p, q = fx.bool(args[0]), fx.bool(args[1])
-            if free:
-                return X(U(not_(p), and_(p, q)))
-            guard = and_(not_(p), not_(right))
-            return or_(right, X(implies(U(guard, p), U(guard, and_(p, q)))))
-        raise SemanticsError(f"unknown future-time function {name}", e.span)
+                raise SemanticsError(f"{name} takes (p, q)", e.span)
+            p, q = x.bool(args[0]), x.bool(args[1])
+            if self.free:
+                return mirror.step(mirror.tie(not_(p), and_(p, q)))
+            guard = mirror.guard(end, p)
+            return or_(end, mirror.step(implies(mirror.tie(guard, p),
+                                                mirror.tie(guard, and_(p, q)))))
+        raise SemanticsError(f"unknown {mirror.direction}-time function {name}", e.span)
 
     # numeric context
     def term(self, e: A.Expr) -> Node:
@@ -289,6 +276,26 @@ def _until_bounded(a: Node, b: Node, m: int, n: int) -> Node:
     if m == 0:
         return inner
     return and_(G(a, 0, m - 1), F(inner, m, m))
+
+
+class _Mirror(NamedTuple):
+    """One direction of FRET's mirrored functions: its formula kind, direction word,
+    function names (hold, happen, occurrence), operators and the guard of the occurrence."""
+    kind: str
+    direction: str
+    names: tuple[str, str, str]
+    hold: Callable[..., Node]
+    happen: Callable[..., Node]
+    bounded: Callable[[Node, Node, int, int], Node]
+    step: Callable[[Node], Node]
+    tie: Callable[[Node, Node], Node]
+    guard: Callable[[Node, Node], Node]
+
+
+_PAST = _Mirror("pt", "past", ("persisted", "occurred", "prevOcc"), H, O, _since_bounded, Y, S,
+                lambda left, p: and_(not_(left), not_(p)))
+_FUTURE = _Mirror("ft", "future", ("persists", "occurs", "nextOcc"), G, F, _until_bounded, X,
+                  U, lambda right, p: and_(not_(p), not_(right)))
 
 
 _TIME_NAMES = _PAST_FUNCS | _FUTURE_FUNCS
