@@ -55,21 +55,7 @@ def proposal_timeout(bindings_file: str | None) -> Fraction | None:
 
     Raises:
         ShieldError: not a duration, or not positive."""
-    if bindings_file is None:
-        return None
-    text = _shield_table(bindings_file).get("proposal_timeout")
-    if text is None:
-        return None
-    from fretc.common.units import parse_duration
-
-    try:
-        ns = parse_duration(text) if isinstance(text, str) else None
-    except ValueError:
-        ns = None
-    if ns is None or ns <= 0:
-        raise ShieldError(f"{bindings_file}: [shield] proposal_timeout must be a positive "
-                          f"duration (\"300 ms\"), not {text!r}")
-    return Fraction(int(ns), 10**9)
+    return _shield_duration(bindings_file, "proposal_timeout", "300 ms")
 
 
 def latency_budget(bindings_file: str | None) -> Fraction:
@@ -78,11 +64,18 @@ def latency_budget(bindings_file: str | None) -> Fraction:
 
     Raises:
         ShieldError: not a duration, or not positive."""
+    budget = _shield_duration(bindings_file, "latency_budget", "20 ms")
+    return LATENCY_BUDGET if budget is None else budget
+
+
+def _shield_duration(bindings_file: str | None, key: str, example: str) -> Fraction | None:
+    """``[shield] key`` of the binding file in seconds, None when absent. Raises
+    :class:`ShieldError` when it is not a positive duration."""
     if bindings_file is None:
-        return LATENCY_BUDGET
-    text = _shield_table(bindings_file).get("latency_budget")
+        return None
+    text = _shield_table(bindings_file).get(key)
     if text is None:
-        return LATENCY_BUDGET
+        return None
     from fretc.common.units import parse_duration
 
     try:
@@ -90,8 +83,8 @@ def latency_budget(bindings_file: str | None) -> Fraction:
     except ValueError:
         ns = None
     if ns is None or ns <= 0:
-        raise ShieldError(f"{bindings_file}: [shield] latency_budget must be a positive "
-                          f"duration (\"20 ms\"), not {text!r}")
+        raise ShieldError(f"{bindings_file}: [shield] {key} must be a positive duration "
+                          f"(\"{example}\"), not {text!r}")
     return Fraction(int(ns), 10**9)
 
 
