@@ -2,28 +2,7 @@
 verdict events (``fretc report --annotate DIR``), so a violation shows in Foxglove's Log panel
 next to the robot's topics.
 
-The copy holds every schema, channel, message (same bytes, log time, publish time and
-sequence), metadata and attachment record of the original, written with the original's
-chunk compression (zstd, lz4 or none; unchunked stays unchunked), chunk size (the
-uncompressed size of its first chunk) and MCAP profile, plus:
-
-* one channel, topic :data:`VERDICT_TOPIC`, schema ``foxglove.Log`` (encoding
-  ``jsonschema``, the schema text :data:`FOXGLOVE_LOG_SCHEMA` after
-  foxglove/schemas ``schemas/jsonschema/Log.json``), message encoding ``json``;
-* its messages (``log_time = publish_time`` = the event's time on the log clock, the
-  ``timestamp`` field the same time as ``{sec, nsec}``), for every requirement audited on the
-  log (:func:`verdict_events`): a WARNING at the trigger and an ERROR at the first violation
-  of a violated requirement, an ERROR (violated) or INFO (satisfied) at the earliest
-  definitive LTL3 verdict, and at the last tick the FRET finite-trace verdict (INFO satisfied
-  or vacuous, ERROR violated, WARNING error);
-* one metadata record ``fretc.verdicts`` (requirement id -> verdict).
-
-The original is read record by record (``mcap.stream_reader``), so a damaged MCAP (a crashed
-recording) is copied up to the damage; :class:`AnnotateResult` says so.
-
-Times: the audit's times are on the log clock it used (``time_base``: MCAP log time, or
-``header.stamp``); the events are written at those times.
-"""
+Design notes: ARCHITECTURE.md, `audit/annotate.py`."""
 
 from __future__ import annotations
 

@@ -5,27 +5,7 @@ is judged (the ticks strictly before :attr:`fretc.logs.LogSource.intact_end`); a
 obligation still open where that span ends (a cut, or the first gap) is *unknown*, not
 violated; a violation decided entirely before the damage stands.
 
-FRET's finite-trace verdict at the cut is not evidence: it reads the cut as the end of the
-run, so ``upon too_close ... shall eventually satisfy stopped`` with a trigger still waiting
-at the cut comes out violated although the run went on. Which verdict a requirement gets
-(:func:`verdict_at_damage`):
-
-* **violated** - the earliest definitive LTL3 verdict of the infinite-trace formula (Bauer,
-  Leucker, Schallhart, "Runtime Verification for LTL and TLTL", TOSEM 2011) is "violated" at
-  a tick inside the intact span: no continuation of the run can satisfy the requirement, so
-  the damage changes nothing. Requirements without an online monitor (a future-time function,
-  engine ``interval``) have no LTL3 verdict; for them a violation stands only when its scope
-  interval closed before the last intact tick (FRET's interval semantics, the future-time
-  functions being relative to the interval end).
-* **satisfied** (or **vacuous**) - the earliest definitive LTL3 verdict is "satisfied"
-  inside the intact span: every continuation of the run satisfies the requirement.
-* **unknown** - everything else: FRET's finite-trace verdict over the intact span is
-  "violated" but no violation was decided before the damage; or it "holds" but the prefix
-  does not decide the requirement (its LTL3 verdict is not definite): an invariant
-  (``always``) that held so far, a trigger whose obligation is still open at the end of the
-  span (:func:`open_obligations` names it), a scope never entered so far. What the lost part
-  of the run held is not known, so neither is the verdict.
-"""
+Design notes: ARCHITECTURE.md, `audit/damage.py`."""
 
 from __future__ import annotations
 

@@ -1,31 +1,7 @@
 """Gaps in a log and the ticks they leave unknown (../shared/DESIGN.md, "Damage is a gap:
 never evidence, never the end").
 
-A gap (:class:`fretc.logs.base.Gap`: a ULog dropout, a chunk that fails its CRC, a record
-that does not parse, a message present but not decoded) is a log-time span in which messages
-of some topics may be missing. Nothing is held over it: at a tick ``t`` a topic's value is
-*unknown* when a gap on that topic started at or before ``t`` and the message the tick holds
-is not newer than the gap's end (a lost message could be the newer one); it is known again
-from the first message after the gap. A binding that reads a topic's previous message
-(``@delta`` ...) is unknown one message longer (its previous message may be lost); an
-aggregation over the messages between two ticks (``any_of_messages`` ...) is unknown at every
-tick whose span since the previous tick meets a gap; a window over a duration
-(``mean(x, 2s)``) at every tick whose window ``(t - span, t]`` meets a gap, and a window over
-a count of messages from the gap on (how many messages the gap held is not known). A
-variable is unknown where any topic it reads is.
-
-A *silence* (:data:`fretc.logs.recorded_gaps.SILENT_CAUSES`: a topic's publisher away, so
-nothing of it was sent) is read the same way for the topic's values, which are never held
-over it; but a variable that reads the topic only through ``age(/topic)`` is known in it:
-the time since its last message grows, as in a log in which the topic falls silent, so a
-staleness requirement is judged (a LiDAR that dies).
-
-Under the header time base, tick times are header stamps: a gap counts from ``header_lag_ns``
-before its start (a lost message's stamp may precede its log time by that much).
-
-``--bridge-gaps D`` (:func:`split_bridged`) holds values over the gaps shorter than ``D``
-instead: those are listed as bridged and leave no tick unknown.
-"""
+Design notes: ARCHITECTURE.md, `audit/gaps.py`."""
 
 from __future__ import annotations
 

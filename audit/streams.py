@@ -1,26 +1,7 @@
 """The columns of the stream variables a requirement reads, computed from its clock's pass
 (:func:`with_streams`).
 
-A FRET Internal variable whose definition reads itself through ``pre`` (``psiAtZero`` is
-``Psi -> if (hdg and not pre hdg) then Psi else pre psiAtZero``) and that no binding binds
-is computed by the audit tick by tick over the requirement's own ticks, from the columns of
-the variables its definition reads (its :class:`fretc.fretish.fret_streams.StreamSystem`'s
-inputs, which are the requirement's variables read from the log: :mod:`fretc.audit.plan`),
-exactly as Lustre defines it (:mod:`fretc.compiler.stream_code`). Every judge of the audit
-takes the requirement through :func:`fretc.audit.finalize.finalize`, which calls this first;
-the CSV judge that streams rows does not (:func:`fretc.audit.streamed.unstreamed_reason`), so
-such a requirement's verdict is the whole-trace judge's on every path.
-
-Unknown values (a gap, an ``unknown`` cell, a ``gap`` row, and NaN under fretc's NaN rule):
-each stream variable is unknown at a tick where its definition's value could differ for some
-value of the unknown inputs it reads, by Kleene's logic over the definition, tick by tick
-(``false and x`` is known whatever ``x``; ``if c then a else b`` with ``c`` known is the
-branch taken; a value held through ``pre`` is as known as when it was read; after a tick
-that stands for an unknown number of ticks, a gap of the tick topic or a ``gap`` row, no held
-value is known), so a stream reset by known values is known again; the three-valued judge decides over the ticks it is
-unknown at (:mod:`fretc.audit.unknown_ticks`). Sound: no verdict rests on a value an unknown
-input could change.
-"""
+Design notes: ARCHITECTURE.md, `audit/streams.py`."""
 
 from __future__ import annotations
 

@@ -3,24 +3,7 @@ probability OP p`` per trigger: :mod:`fretc.compiler.pctl`): each trigger of FRE
 semantics (:mod:`fretc.monitors.interval`) whose obligation the log decides is one trial,
 satisfied or violated; the others are counted apart, never as trials of either outcome.
 
-* **satisfied** / **violated**: the obligation from the trigger (:mod:`fretc.monitors.
-  obligations`) is met / missed on the ticks read, whatever the unknown ticks held (the
-  scope interval's bounds and the trigger are known, and so are the response and stop
-  condition on the ticks that decide it: :class:`fretc.monitors.unknowns.Unknowns`).
-* **cut**: the log ends (a complete log: the run ended there) inside the trigger's timing
-  window, which reaches past its last tick, before the ticks read decide the obligation:
-  ``within``, ``for``, ``after`` and ``next`` near the end. FRET's finite-trace semantics
-  reads such a trigger as met (the interval ended first); it is no trial. The untimed
-  obligations (``eventually``, ``always``, ``until``...) end with the run, as FRET's
-  finite-trace verdict of the run reads them.
-* **unknown**: a trigger whose interval bounds, trigger point or deciding ticks are unknown
-  (a gap of the log, a comparison with NaN), or whose obligation is still open where a
-  damaged log stops being read (the run went on: :func:`fretc.audit.damage.open_reason`).
-  What they count for is the fleet statistics' unknown policy
-  (:mod:`fretc.audit.fleet.statistics`): never a success.
-* **hidden**: a trigger may have fired in unknown ticks (the scope mode or the condition is
-  unknown somewhere): such triggers are not seen, so not counted; a note says so.
-"""
+Design notes: ARCHITECTURE.md, `audit/trials.py`."""
 
 from __future__ import annotations
 

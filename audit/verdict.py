@@ -1,26 +1,6 @@
 """What an audit found, as plain dataclasses and a stable JSON document.
 
-``fretc audit --json FILE`` writes :func:`audit_json`; ``fretc report`` (another module) reads
-the same document. Shape (schema ``fretc-audit/1``; keys sorted, two-space indent)::
-
-    {
-      "schema": "fretc-audit/1",
-      "requirements": [ {id, text, source, line, key, variables, tick_period_s,
-                         duration_ticks, offline, error, notes} ... ],
-      "bindings": {sources: [...], tick: {period_ns | topic}, time_base,
-                   variables: {name: {expr, source, line, topics}}} | null,
-      "logs": [ LogAudit.to_json() ... ],              # in the order the logs were given
-      "summary": {satisfied, vacuous, violated, error, partial_logs, incomplete_logs,
-                  log_errors, exit_code},
-      "not_formalized": [ {id, source, line, origin} ... ]  # only when there are any
-      "statistics": [ RequirementStatistics.to_json() ... ]  # only with several logs or a
-    }                                                         # probability requirement
-
-Every time is given twice: ``*_ns`` integer nanoseconds and ``*_s`` seconds since the log's
-first message. Verdicts: ``satisfied``, ``vacuous``, ``violated``, ``error``, ``unknown``
-(docs/guide/audits.md "Verdicts"). The statistics, origins, clocks of each time and the
-verdicts in full: ARCHITECTURE.md ("The audit's verdicts and JSON").
-"""
+Design notes: ARCHITECTURE.md, `audit/verdict.py`."""
 
 from __future__ import annotations
 

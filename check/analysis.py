@@ -4,38 +4,7 @@ runs"); for queries with a bound past :data:`SPOT_MAX_BOUND`, by fixed points ov
 requirements' pt monitors (:mod:`fretc.check.monitor_sat`) when every formula has one, else by z3
 (:mod:`fretc.check.smt`).
 
-Everything is decided on the **ft_inf** formulas (infinite traces), with the comparisons
-abstracted by :mod:`fretc.check.numeric_abstraction` (its invariants are conjoined to every
-query). Requirements are split into **groups**: two requirements are in one group
-when they share a variable (a numeric variable counts as shared through its comparisons).
-Formulas over disjoint variables are satisfiable together iff each is, so every question is
-asked per group, which keeps Spot's automata small.
-
-Checks, per group (each query has the work and memory budgets of :mod:`fretc.check.budget`,
-counted by the engines, never in seconds; a query past them answers "unknown", and a check
-with an unknown answer says so rather than guessing):
-
-1. **Satisfiability** of each requirement and of the group.
-2. **Non-vacuity** (Beer et al., CAV 1997; Kupferman & Vardi, STTT 2003, vacuity with
-   respect to the response): a run satisfies requirement R *vacuously* when R would hold
-   there whatever its response does. With ``R[false]`` and ``R[true]`` the requirement with
-   its response replaced by ``false`` and ``true`` (formalized by FRET's semantics like any
-   requirement), ``trigger(R) = !R[false] | !R[true]`` says that some trigger of R fires
-   inside its scope with room for the response to matter. R is **vacuous in the set** when
-   ``set & trigger(R)`` is unsatisfiable while the set is satisfiable: whatever run meets
-   all requirements never enters R's scope or never fires its condition. FRET's example
-   ``in modeA ... always a`` with ``in modeA ... always !a`` is found this way.
-3. **Minimal conflicts**: for an unsatisfiable group, the minimal unsatisfiable subsets;
-   for a vacuous requirement, the minimal subsets containing it that are unsatisfiable with
-   its trigger. Enumerated by size, smallest first, over connected subsets, within
-   ``mus_budget`` subset checks (a cut enumeration says so; each subset says whether it is
-   shown smallest, minimal, or not shown minimal).
-4. **Redundancy** (warning): a requirement implied by the other requirements of a
-   satisfiable group (``others & !R`` unsatisfiable), or holding on every run.
-
-Witness traces for the findings are built by :mod:`fretc.check.witness`, realizability by
-:mod:`fretc.check.realizability`.
-"""
+Design notes: ARCHITECTURE.md, `check/analysis.py`."""
 
 from __future__ import annotations
 

@@ -8,26 +8,7 @@ several variables (``yout = timeStep * 0.5 * (xin + xinpv) + ypv``, ``a = b``, `
 whether it holds, but nothing chooses numbers that make it so, and a trace with every free
 number 0 makes ``yout = ...`` true whatever the model asked.
 
-:func:`concrete_rows` closes that gap one tick at a time (the atoms are state formulas: their
-truth at a tick depends on that tick's values only): the truth values the model gives every
-comparison atom it names become a quantifier-free arithmetic query over the tick's numeric
-variables (z3 reals, first asked for integer values, whose sums and products the audit's
-floating point computes exactly, then for any real values), with every divisor non-zero (the
-audit reads ``x / 0`` as unread, never as a number). A tick whose query z3 answers takes
-the model's numbers when the audit's floating point reads every comparison as asked (an
-irrational model may round the other way); a tick it cannot answer (unsat: the abstraction's
-letter is spurious; or out of its resource limit) keeps the abstraction's numbers, and the
-caller's judge rejects the trace as before. This is the concretization step of counterexample-guided abstraction
-refinement (Clarke, Grumberg, Jha, Lu, Veith, CAV 2000), without the refinement: the judge
-is the arbiter, so a wrong number can cost a test, never a wrong verdict.
-
-Terms translated: variables, numerals, ``+ - * /``, unary minus, ``absReal``/``absInt``,
-``minReal``/``minInt``/``maxReal``/``maxInt``; an uninterpreted function application
-(``sqrt(weight)``) is a number of its own, as the audit reads it (its column); FRET's
-``preReal(init, x)`` is a constant, the previous tick's ``x`` (``init`` at the first tick),
-since the ticks are solved in order. A comparison holding anything else (``mod``, ``^``,
-boolean past-time functions inside it) is left out of the query.
-"""
+Design notes: ARCHITECTURE.md, `check/atom_values.py`."""
 
 from __future__ import annotations
 

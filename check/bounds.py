@@ -3,34 +3,7 @@ inputs (``linear_velocity <= 0.5 * (front_dist - 0.3)``, ``1.5 * linear_velocity
 front_dist``, ``linear_velocity <= 0.3 * proposed_velocity``: Nav2's collision monitor's
 slowdown, limit and approach written as requirements) as atoms of a game.
 
-A **bound** is a comparison (``<``, ``<=``, ``>``, ``>=``) that reads at least one input and
-exactly one output variable, once, through ``+``, ``-``, negation, and products and quotients
-by constants (:func:`classify`). Over the reals it reads ``v OP B``, ``B`` a term over the
-inputs and constants (``1.5 * v <= d`` is ``v <= d / 1.5``): each of its truth values is a
-half-line of ``v`` ending at ``B``.
-
-Which truth values the controller can give a set of such comparisons of one output depends on
-the tick's numbers. Every truth value of a comparison of ``v`` (the bounds, and ``v``'s
-comparisons with constants) is a half-line, an interval; on the line, intervals that meet two
-by two have a common point (Helly's theorem in one dimension), so a valuation is given by some
-number exactly when its half-lines meet pairwise, and ``v <= B_x`` (or ``<``) meets ``v >=
-B_y`` (or ``>``) exactly when ``B_y <= B_x`` (``B_y < B_x`` when either is strict), two
-half-lines of one direction always. :func:`feasibility` gives
-
-* the **order comparisons** ``B_y <= B_x`` / ``B_y < B_x``: comparisons of the inputs, the
-  feasibility of each pair of truth values, which the game reads as the environment's atoms
-  (related to the other comparisons of the inputs by z3, :mod:`fretc.check.predicates`, and
-  by the numeric abstraction when one reads one input against a constant);
-* the **controller's invariant**: a pair of truth values only where its order comparison
-  holds.
-
-So the game's controller never chooses truth values no number gives, and at a tick where
-only one truth value of a comparison is feasible, the environment has fixed it; the answer is
-exact over the reals (the controller, which sees the numbers, can give a valuation exactly
-when the order comparisons say so). Over the reals every half-line has numbers; the shield's
-runtimes, in doubles, say what they do with a bound no finite double meets
-(:mod:`fretc.shield.runtime_bounds`).
-"""
+Design notes: ARCHITECTURE.md, `check/bounds.py`."""
 
 from __future__ import annotations
 

@@ -1,35 +1,7 @@
 """Realizability of requirement sets with ``eventually`` responses by a symbolic Büchi game
 (``fretc check``), beside the safety game of :mod:`fretc.check.safety_game`.
 
-A requirement whose ft_inf formula is not a safety property (``eventually``, ``until`` with
-a required end) has no pt monitor that decides it, but it usually has a small
-*deterministic* Büchi automaton: ``whenever p ... eventually q`` (``G(p -> F q)``) is two
-states, "nothing pending" and "waiting for q", with the accepting edges those into "nothing
-pending". Spot builds it from the ft_inf formula (``spot.translate(f, 'Buchi',
-'deterministic')``), as long as the requirement's own bounds are small; the set's long
-deadlines stay in the safety requirements' pt monitors, as counters
-(:class:`fretc.check.pt_monitor.Monitor`). The game is played on the product: the pt monitors'
-state bits and each automaton's state in ``ceil(log2 states)`` bits.
-
-The controller wins a run when every safety requirement's pt formula holds at every tick, no
-automaton is left without an edge, and each acceptance set of each automaton is met on
-infinitely many ticks: a generalized Büchi condition. The winning states are the classic
-nested fixed point (Emerson & Jutla, FOCS 1991; for games on BDDs, e.g. Piterman, Pnueli,
-Sa'ar, "Synthesis of Reactive(1) Designs", VMCAI 2006):
-
-    W = nu Z. AND_j mu Y. cpre((acc_j & next in Z) | next in Y)
-    cpre(T)(s) = forall inputs (env_ok -> exists outputs (ctl_ok & ok & T))
-
-each tick the environment sets the inputs first, the controller then sets the outputs
-knowing them (a Mealy machine, :data:`fretc.check.realizability.MACHINE`). The set is realizable
-iff the first state is in ``W``; both answers are exact on the abstraction of the
-comparisons (:mod:`fretc.check.numeric_abstraction`). Tests compare them with Spot's own synthesis
-game on random sets with small bounds.
-
-Outside the method (:class:`fretc.check.pt_monitor.Outside`; the caller falls back to Spot's
-game): a formula Spot gives no deterministic generalized Büchi automaton for (``FG``-like
-persistence), or an atom the game cannot give a player.
-"""
+Design notes: ARCHITECTURE.md, `check/buchi_game.py`."""
 
 from __future__ import annotations
 

@@ -1,31 +1,7 @@
 """The budgets of ``fretc check``'s queries, counted in work the engines do, never in seconds:
 the same input gets the same answers on an idle and on a loaded machine.
 
-* **work** (``--budget``, per query, in *work units*): the BDD engines
-  (:mod:`fretc.check.monitor_sat`, :mod:`fretc.check.safety_game`, :mod:`fretc.check.buchi_game`) pay, for
-  each fixed-point iteration, one unit per BDD node of the transition relation it steps
-  through and of the set it computes: a BDD is canonical for its function and variable
-  order, so the count does not depend on the order of the operations, on BuDDy's garbage
-  collections or on the machine, and it grows with the work of the relational products.
-  z3 (:mod:`fretc.check.smt`) pays :data:`Z3_RLIMIT_PER_UNIT` of its deterministic resource count
-  (``rlimit``) per unit. Spot's translations and products cannot be stopped from Python, so
-  what Spot is given is bounded up front (:mod:`fretc.check.solver`: tick bounds, automaton
-  states) and a Spot query either finishes or is refused.
-* **memory** (``--memory-budget``, per query, in *BDD nodes*): the size of BuDDy's node
-  table in the worker process (``bdd_setmaxnodenum``; BuDDy stops the process when it would
-  grow past it), and, in the same unit, the state variables of the monitors
-  (:data:`NODES_PER_VARIABLE` each, checked before they are made), z3's lasso encodings
-  (:data:`NODES_PER_Z3_TERM` per term, checked before they are built) and everything z3
-  allocates for a query (:data:`BYTES_PER_NODE` bytes a node, z3's own count of the bytes
-  it asked for, ``memory_max_size``: deterministic, not the process's resident size; z3
-  runs in the worker process too, so a query it cannot finish within it stops there).
-
-A query past a budget answers ``unknown`` with the reason (:class:`BudgetSpent`). Defaults
-(:data:`DEFAULT_WORK`, :data:`DEFAULT_MEMORY`) are chosen so that every query the benchmark
-sets of docs/guide/check.md decided within 20 s on an idle machine stays decided, and so
-that 20 requirements with bounds near 10^6 ticks stay under 1 GB (docs/guide/check.md,
-"Budgets").
-"""
+Design notes: ARCHITECTURE.md, `check/budget.py`."""
 
 from __future__ import annotations
 

@@ -2,34 +2,7 @@
 shortest trace on which they disagree (a *distinguishing trace*, as FRET's formalization
 validation shows an engineer: Giannakopoulou, Pressburger, Mavridou et al., ICSE 2026).
 
-The verdicts compared are FRET's finite-trace verdicts (ft at the first tick, the verdict of
-an audit), on every finite trace of one or more ticks.
-
-* **The shortest distinguishing trace** is found breadth-first over the product of the two
-  requirements' generated runtime monitors (:mod:`fretc.compiler.codegen`; each monitor's
-  ``step`` returns FRET's verdict of the trace so far), one letter per valuation of the
-  variables: booleans true or false, each numeric variable compared with constants one value
-  per region those constants cut the real line into (the midpoints of
-  :mod:`fretc.check.numeric_abstraction`; exact for such comparisons). Level by level, the
-  first trace whose two verdicts differ is a shortest one. States are compared with the
-  windows of bounded past operators made relative to the current tick, so a search that runs
-  out of new product states has seen every behaviour: the two are equivalent on every finite
-  trace (the monitors' proof).
-* **Equivalence** is proved by Spot (up to :data:`fretc.check.checker.SPOT_MAX_BOUND` ticks in a
-  bound; z3 past it, :mod:`fretc.check.smt`): ``ft_A xor ft_B`` under FRET's finite-trace model
-  (:func:`fretc.check.witness.finite_trace`) has no model. When the search stopped at its
-  bounds, that query's model, if any, is the (not necessarily shortest) distinguishing trace,
-  replayed on the monitors to be believed.
-* Anything else is **unknown**, with the reason: an atom neither a variable nor a variable
-  compared with a constant (arithmetic, two variables compared, a function: the letters
-  would not be finite, and a solver's model over it may be spurious), a search and a solver
-  that both ran out of their bounds.
-
-Every trace shown is judged again by the audit's interval semantics
-(:func:`fretc.monitors.interval.verdict_of`), whose words (``satisfied``, ``vacuous``,
-``violated``) are the verdicts shown; a disagreement between it and the monitors is reported
-as unknown, never hidden.
-"""
+Design notes: ARCHITECTURE.md, `check/distinguish.py`."""
 
 from __future__ import annotations
 

@@ -8,19 +8,7 @@ repeated forever) along which no output sequence meets the set. For one lasso th
 games' own fixed point with the inputs fixed and the outputs alone to choose
 (:func:`defeats`). Two searches use it:
 
-* short lassos, shortest first (:func:`input_lasso`, up to :data:`MAX_LASSO` ticks of prefix
-  and cycle); a lasso whose cycle is one letter ``c`` is decided without a new fixed
-  point: ``keep(c)``, the states from which ``c`` forever leaves the outputs a way to meet
-  the set, is computed once per letter (:func:`keep_forever`), and the lasso defeats every
-  controller iff no state the prefix can lead to (over every output keeping the
-  requirements, :func:`post`) is in it;
-* longer prefixes with a one-letter cycle, breadth first over the sets of states a prefix
-  leads to (:func:`prefix_search`): "request and halt at tick 0, then halt forever" is found
-  at any bound, in one fixed point per input letter.
-
-Every search is paid in work units (:mod:`fretc.check.budget`); past its budget it says so and the
-report says the environment *may* have to react, never that it must.
-"""
+Design notes: ARCHITECTURE.md, `check/fixed_inputs.py`."""
 
 from __future__ import annotations
 

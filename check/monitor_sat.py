@@ -9,27 +9,7 @@ holds on an infinite run iff pt holds at every tick), each kind is a property of
 of the pt monitors (:class:`fretc.check.pt_monitor.Monitor`: one bit per ``Y``/``O``/``H``/``S``,
 a counter of ``log2 w`` bits per ``O[0,w]``, one per deadline), so no bound is unrolled into states:
 
-* a requirement holding: its pt formula true at every tick (a *safe* formula);
-* a trigger firing: ``!pt(R[false]) | !pt(R[true])`` true at some tick, a *goal* (the
-  trigger of :func:`fretc.check.analysis.make_item` is ``!R[false] | !R[true]``, and each of these
-  ft_inf formulas is false iff its pt formula is false at some tick);
-* a requirement violated: ``!pt(R)`` true at some tick, a goal too.
-
-Each goal gets one more bit, ``O goal`` (it held at some tick so far). On infinite runs
-(ft_inf), the states from which the safe formulas can hold forever are the greatest fixed
-point ``Live = nu Z. exists letter (ok & next in Z)``; the query is satisfiable iff a state
-of ``Live`` where every goal bit is set is reachable from the first state through ``Live``,
-a least fixed point computed backwards from those states (symbolic model checking, McMillan
-1993; Clarke, Grumberg, Peled, "Model Checking", ch. 6). On finite traces (FRET's ft, for the
-witness traces of :mod:`fretc.check.witness`), a requirement holds on a trace iff its pt formula
-holds at the last tick; the pt formulas monitored here are false from their first false
-tick on (tested), so the same reachability without ``Live`` gives a shortest trace, read
-off the layers of the fixed point.
-
-Both answers are exact on the abstraction of the comparisons (:mod:`fretc.check.numeric_abstraction`,
-its region invariant conjoined at every tick); tests compare them with Spot's on random
-sets. The BDDs are BuDDy's, shipped with Spot.
-"""
+Design notes: ARCHITECTURE.md, `check/monitor_sat.py`."""
 
 from __future__ import annotations
 

@@ -1,26 +1,6 @@
 """Propositional abstraction of the numbers in requirement formulas, for ``fretc check``.
 
-Spot decides propositional LTL: every comparison (IR ``cmp`` node) is an atomic proposition
-to it. Comparisons of one numeric variable with constants (``speed <= 0.5``, ``3 < x``,
-``x = 2``) are not independent, so this module adds, per such variable ``x``, the invariant
-that at every tick the comparisons take the truth values of one real value of ``x``: the
-constants ``c1 < ... < ck`` cut the real line into the regions ``(-inf, c1)``, ``{c1}``,
-``(c1, c2)``, ... ``(ck, +inf)``, and ``G (region_1 | ... | region_2k+1)`` where each region
-fixes the truth of every comparison of ``x``. This is exact for real-valued variables (it
-gives ``x > 5 -> x > 3``, ``!(x < 2 & x > 3)``, and ``x = 2 -> x <= 2``); integer variables
-are read as reals (``x > 1 & x < 2`` stays satisfiable), except where a caller names them
-(``integers``: the shield's outputs FRET declares whole numbers, whose regions are those an
-integer lies in).
-
-Anything else (comparisons of two variables, arithmetic, numeric functions, boolean
-functions, past-time functions inside future formulas) stays an independent proposition and
-is listed by :meth:`NumericAbstraction.uninterpreted` as an abstraction that can make a
-finding spurious.
-
-The module also goes back from the abstraction to numbers: :meth:`NumericAbstraction.values`
-picks, for one tick's truth values of the comparisons, a value of each variable that gives
-them (the midpoint of the region).
-"""
+Design notes: ARCHITECTURE.md, `check/numeric_abstraction.py`."""
 
 from __future__ import annotations
 

@@ -6,27 +6,7 @@ A FRET ft formula holds past-time parts as *derived atoms* (IR ``past`` nodes: F
 propositions: a trace it finds may give such an atom a value its expansion does not have,
 and the judge then rejects the trace (a test not generated, a witness not built).
 
-:func:`with_testers` removes them: each past-time operator of an expansion becomes a fresh
-proposition, a *tester* (Pnueli, Zaks, "On the merits of temporal testers", 2008; Kesten,
-Pnueli, Raviv, "Algorithmic verification of linear temporal logic specifications", ICALP
-1998), whose value at every position the future-time axioms below fix, by the pt recursion
-of FRET's semantics (:mod:`fretc.compiler.evaluate`: position 0 is the first tick):
-
-* ``Y a`` (strong previous): ``!t & G(X t <-> a)``; ``Z a`` (weak): ``t & G(X t <-> a)``;
-* ``a S b``: ``(t <-> b) & G(X t <-> (X b | (X a & t)))``; ``a T b`` = ``!(!a S !b)``;
-* ``O a`` = ``true S a``, ``H a`` = ``!O !a``; bounded ``O[lo,hi] a`` = ``Y^lo a | ... | Y^hi
-  a`` and ``H[lo,hi] a`` = ``Z^lo a & ... & Z^hi a`` (a chain of testers, the window of
-  :func:`fretc.compiler.ir.window`), up to :data:`MAX_WINDOW` ticks;
-* ``FTP``: ``t & X G !t``;
-* a FRET stream by its state bit (:func:`fretc.compiler.ir.stream`: ``p`` when it held at
-  the previous position, else ``q``): ``t`` its previous value, ``!t & G(X t <-> (t & p |
-  !t & q))``, its value ``t & p | !t & q``.
-
-The atom is then its expansion over the testers, a formula of the present position, and the
-trace's letters carry the testers (which no column reads). A past atom whose expansion holds
-something else (a bounded window past :data:`MAX_WINDOW`, a comparison reading a previous
-value, a future-time part) stays a free proposition, as before.
-"""
+Design notes: ARCHITECTURE.md, `check/past_testers.py`."""
 
 from __future__ import annotations
 

@@ -1,26 +1,7 @@
 """Comparisons of several variables (``x < y``, ``a + b > c``, ``state = ap_standby_state``)
 decided by z3: which truth values of linked comparisons real numbers realize.
 
-The numeric abstraction (:mod:`fretc.check.numeric_abstraction`) ties together the
-comparisons of *one* variable with constants; a comparison of several variables is an
-independent proposition there, which a game's player may set to truth values no numbers give
-(``x < y`` and ``y < x`` together). Per **cluster** (the comparisons linked by the numeric
-variables they share, comparisons of one variable with a constant included), z3 decides which
-valuations of the cluster's atoms real numbers realize (the variables read as reals), by lazy
-enumeration with unsat cores (the lemmas of DPLL(T), Nieuwenhuis, Oliveras, Tinelli, JACM 53,
-2006): a propositional search proposes a valuation, z3 decides it; a realizable one is kept
-(its model handed to the caller), an unrealizable one is excluded with its unsat core. The
-invariant (the conjunction of the cores' negations) is exact: every valuation it allows was
-found realizable, every one it excludes has no numbers.
-
-Used by ``fretc check``'s realizability (:mod:`fretc.check.realizability`: the invariants
-join the environment's assumptions and the controller's obligations) and by the shield
-(:mod:`fretc.shield.predicates`: its overrides take the models' numbers).
-
-Only comparisons whose truth at a tick depends on that tick's numbers can be decided so;
-:func:`undecidable` says why one cannot (a previous value, ``preReal``; a function z3 is not
-given).
-"""
+Design notes: ARCHITECTURE.md, `check/predicates.py`."""
 
 from __future__ import annotations
 

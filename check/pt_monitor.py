@@ -8,29 +8,7 @@ TACAS 2002): one bit per ``Y``, ``Z``, ``O``, ``H``, ``S``, ``T`` and FRET boole
 the ticks since ``x`` last held, saturated (``log2 w`` bits); ``O[l,h] x`` is ``O[0,h-l]`` of
 ``x`` delayed ``l`` ticks (``l`` bits of delay line).
 
-A deadline ``O[N,N] a -> O[0,N-1] b`` ("every ``a`` is followed by ``b`` within ``N``
-ticks": FRET's ``within`` and ``after`` timings) read only under ``H`` or as the left of a
-``since`` whose start implies ``b`` (FRET's scopes: a mode entry discharges the deadlines) is
-monitored by one counter instead of a delay line (:meth:`Monitor._deadline`): the age of the
-oldest ``a`` with no ``b`` after it. The value of the deadline at a tick differs from the
-delay line's only after a violation inside the same ``H`` or ``since``, where the enclosing
-formula is false either way, so the enclosing formula's value is exact at every tick
-(tests/check/test_monitor_sat.py compares both on random traces for every template).
-
-Variable order (the BDDs' sizes depend on it, the answers not), top to bottom: the atoms,
-the one-bit states in the order they are made (each requirement's together), the bits of
-every counter in one block interleaved by significance (the most significant bits of all
-counters first), the delay lines (each in delay order). The sets of states the fixed points
-of :mod:`fretc.check.monitor_sat` meet relate counters by differences and sums ("the hold ends
-before the deadline"), which take ``O(log N)`` nodes with interleaved bits and ``O(N)``
-with each counter's bits together; the one-bit states above the block decide when a counter
-resets. Measured on bench/bench_check.py's 1000-tick set: the states that keep every
-requirement took about 100 nodes instead of 3000. The monolithic transition relation grows
-the other way (the counters' carries multiply), so the fixed points step through it in
-parts (:meth:`Monitor.parts`). The delay lines stay last: a set that asks whether a line
-holds a bit between two counter values is then linear in the line's length, exponential
-the other way round (measured: twice the nodes per tick with the counters after the lines).
-"""
+Design notes: ARCHITECTURE.md, `check/pt_monitor.py`."""
 
 from __future__ import annotations
 

@@ -1,34 +1,6 @@
 """Realizability of requirement sets for ``fretc check``.
 
-The FRET variables are split into **inputs** (the environment's: sensor-derived, e.g.
-``too_close``) and **outputs** (the controller's, e.g. ``stopped``). As in FRET, which checks
-realizability only when every variable is declared, a group that reads a variable
-declared neither input nor output is not decided: an ``undeclared`` finding (an input error,
-exit 2) names each such variable with the requirements that read it and how to declare it,
-and the other groups are decided. No role is ever assumed: taking a sensor reading
-(``clearance``) as the controller's would call ``always clearance > 0`` realizable. A set is
-*realizable* when a controller exists that, reading the inputs tick by tick, sets the
-outputs so that every requirement holds on every infinite run whatever the inputs do
-(Pnueli & Rosner, POPL 1989). As in FRET's realizability checking, the question is asked per
-group of requirements sharing variables (a connected component of the graph of shared variables).
-
-Safety requirements are decided by the symbolic safety game of :mod:`fretc.check.safety_game`
-(their pt monitors, numeric outputs as constrained controller choices) unless the engine
-is ``spot``; an unrealizable safety part makes the group unrealizable; otherwise a
-group with a requirement that is not safety goes to Spot's game, as follows.
-
-Each group's specification, on the ft_inf formulas with the numeric abstraction
-(:mod:`fretc.check.numeric_abstraction`), is ``inv_in -> (R1 & ... & Rn & inv_out)``: the
-invariants of input comparisons are assumptions on the environment, those of output
-comparisons obligations of the controller. A comparison is an output when it reads an output
-variable. Spot decides it with a synthesis game (``spot.ltl_to_game``, ``spot.solve_game``);
-for a realizable group the size of the Mealy machine Spot extracts
-(``spot.solved_game_to_mealy``) is reported. For an unrealizable one: the minimal
-unrealizable subsets (smallest first, within the budget) and, when one exists, a fixed input
-sequence (a lasso: prefix, then a cycle repeated forever) along which no output sequence
-meets the requirements - so it defeats every controller. When no fixed sequence wins, the
-environment has to react to the outputs and the report says so.
-"""
+Design notes: ARCHITECTURE.md, `check/realizability.py`."""
 
 from __future__ import annotations
 

@@ -1,44 +1,6 @@
 """Realizability of safety requirements by a symbolic safety game (``fretc check``).
 
-A requirement whose ft_inf formula is a *safety* property (every violating run has a finite
-bad prefix: bounded responses, always, immediately, next, within/for/until/before N ticks,
-in every scope) is violated exactly when its FRET **pt** formula turns false at some tick:
-FRET's pt formula is the finite-trace verdict "no violation yet" (Havelund & Rosu, TACAS
-2002, monitor synthesis). The pt formula's monitor is a deterministic finite-state machine
-whose state is the previous tick's value of each past-time sub-formula: one bit for ``Y``,
-``Z``, ``O``, ``H``, ``S``, ``T``; for a bounded ``O[0,w] x`` the ticks since ``x`` last held,
-saturated at ``w + 1`` (a counter of ``log2 w`` bits); ``O[l,h] x`` is ``O[0,h-l]`` of
-``Y^l x`` (``l`` bits of delay line); ``H[l,h] x = !O[l,h] !x``. So the set's product monitor
-is a safety automaton of ``O(sum of log bounds + lower bounds)`` bits, and no bound is
-unrolled into explicit states.
-
-The game (Pnueli & Rosner, POPL 1989; safety games solved by the attractor, Thomas, STACS
-1995): each tick the environment sets the inputs, then the controller sets the outputs
-knowing them (a Mealy machine, :data:`fretc.check.realizability.MACHINE`); the controller loses
-when a requirement's pt formula is false. The states from which the environment forces a
-loss are the least fixed point ``Lose = pre(Lose)`` with
-
-    pre(L)(s) = exists inputs (env_ok & forall outputs (ctl_ok -> !ok(s) | next(s) in L))
-
-computed on BDDs (BuDDy, shipped with Spot: ``import buddy``). ``env_ok`` / ``ctl_ok``
-say the comparisons of each numeric input / output variable take the truth values of one
-real value (:mod:`fretc.check.numeric_abstraction`): a comparison over an output is a choice of the
-controller, constrained like the number it stands for. The set is **realizable** iff the
-initial state is outside ``Lose``; the winning region's BDD is then a controller (its size
-is reported).
-
-For an unrealizable set the layers of ``Lose`` rank states by how many ticks the environment
-needs; a **fixed input sequence** that defeats every controller is searched for over the
-sets of states the monitors can be in after it whatever the outputs (greedy by rank, then
-breadth first within a budget): an input prefix after which no output sequence survives. A
-controller's best effort along it (outputs that keep every requirement as long as possible)
-is returned too, so the run can be replayed through ``fretc audit``.
-
-Outside the method (the caller falls back to Spot's game, or answers unknown): a requirement
-whose ft_inf is not syntactically safe (Sistla, 1994: eventually, until with a required
-end) or whose pt formula has an atom other than a boolean variable or a comparison of one
-variable with a constant.
-"""
+Design notes: ARCHITECTURE.md, `check/safety_game.py`."""
 
 from __future__ import annotations
 

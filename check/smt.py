@@ -5,33 +5,7 @@ Spot translates ``F[0,N] q`` into an automaton whose size grows with N (and refu
 here no bound is unrolled into an automaton. A query (a conjunction of IR formulas, read on
 infinite words as Spot reads them) gets two encodings, tried in turn within one budget:
 
-1. **Lasso models** (bounded model checking with a loop, Biere, Cimatti, Clarke, Zhu, TACAS
-   1999): positions ``0 .. K-1`` whose successor of ``K-1`` is ``l``. Each atom is a z3
-   variable per position; ``U`` (and ``F``, ``G``, ``V`` through it) is computed on the lasso
-   by two backward passes over the loop; a bounded ``F[lo,hi]``/``G[lo,hi]`` reads the
-   distance to its operand's next occurrence (a z3 ``Int`` per position, related to the
-   next position's only), so its size does not depend on the bound. A model found is an ultimately periodic word meeting every formula: **sat** with
-   that word. A shape without model says nothing (a longer lasso may have one).
-2. **A first-order proof** (the translation of LTL into first-order logic over the naturals,
-   Kamp 1968; the SMT encodings of MLTL by Li, Rozier et al. do the same for finite
-   traces): each temporal sub-formula is a z3 function ``Int -> Bool`` defined by its
-   meaning at every position ``t >= 0`` (``F[lo,hi] p``: some ``j`` in ``[t+lo, t+hi]`` has
-   ``p``, and the first such ``j``; ``a U b``: the first ``b`` at or after ``t`` with ``a``
-   before it; ``G``, ``V`` their duals). Naming the *first* occurrence states the
-   well-ordering of the naturals that first-order logic does not prove by itself. z3
-   answering **unsat** means no infinite word (none at all, lasso or not) meets the formulas.
-
-When neither settles the query within the budget (z3's deterministic resource count,
-``rlimit``, never seconds: :mod:`fretc.check.budget`) the answer is :data:`UNKNOWN` and
-:attr:`SmtSolver.failures` says what was tried.
-
-Atoms mean what they mean to Spot through :mod:`fretc.check.numeric_abstraction`: a boolean
-variable is a z3 ``Bool`` per position; a comparison of one variable with a constant
-(``s <= 0.5``) is that comparison on a z3 ``Real`` per position and variable (exact, where the
-abstraction's region invariant says the same); every other atom (``x + y > 2``, a boolean
-function, a past-time function, ``LAST``) is an independent proposition per position.
-``FTP`` is position 0.
-"""
+Design notes: ARCHITECTURE.md, `check/smt.py`."""
 
 from __future__ import annotations
 

@@ -1,35 +1,7 @@
 """FRET's stream variables in the traces fretc builds: ``fretc check``'s witnesses and
 ``fretc testgen``'s tests.
 
-A stream variable (an Internal variable whose Lustre definition reads itself through
-``pre``: LMCPS's ``psiAtZero`` is ``Psi -> if (hdg and not pre hdg) then Psi else pre
-psiAtZero``) is a value the audit computes tick by tick from the variables its definition
-reads (:mod:`fretc.fretish.fret_streams`, :mod:`fretc.compiler.stream_code`); its column in
-a trace is never read. The engines that find a trace (Spot, the pt monitors, z3 over the
-lasso) read a comparison reading one as an independent proposition
-(:mod:`fretc.check.streams`), so the truth values a model gives such a comparison need
-numbers for the *inputs* of the stream that make its computed value take them. This module
-gives them, as :mod:`fretc.check.atom_values` gives numbers to comparisons of several
-variables, one tick at a time and in order:
-
-* at tick ``t`` the stream's definition is a z3 term (:class:`TickTerms`): a numeric input
-  is the tick's z3 Real (chosen with the tick's other numbers), a boolean input the value
-  the model's letter gives it (a z3 Bool when the letter leaves it free), ``FTP`` true at
-  the first tick only, and ``pre e`` (FRET's ``preBool(false, e)``/``preReal(0, e)``) the
-  constant value of ``e`` at tick ``t - 1``, computed from the rows already built
-  (:func:`value_at`), or ``pre``'s first value at tick 0; a boolean stream the letter names
-  must take the letter's value;
-* once every tick is built, each stream's column is computed again from its inputs' columns
-  by the audit's own code (:func:`with_stream_columns`, :func:`fretc.compiler.stream_code.
-  stream_columns`), so the column written is the one the audit computes, whatever z3 found.
-
-So a trace is sound by construction: its stream columns are the audit's, and the judge that
-believes a trace only when it meets its obligation (testgen) or gives the verdicts written
-in its header (check) sees the computed values. z3 failing on a tick (unsat: the letter
-asks of the stream what its definition cannot give; out of its resource limit) costs that
-trace, never a wrong verdict (Clarke et al., CAV 2000's concretization, as in
-:mod:`fretc.check.atom_values`).
-"""
+Design notes: ARCHITECTURE.md, `check/stream_rows.py`."""
 
 from __future__ import annotations
 

@@ -1,25 +1,6 @@
 """FRET's stream variables as ``fretc check`` reads them.
 
-A FRET Internal variable whose Lustre definition reads itself through ``pre`` (FRET's LMCPS
-case study: ``psiAtZero`` is ``Psi -> if (hdg and not pre hdg) then Psi else pre
-psiAtZero``, the heading when the heading mode was last engaged) is a value computed each
-tick from the variables its definition reads, now and at earlier ticks
-(:mod:`fretc.fretish.fret_streams`), as FRET's realizability reads an Internal variable: its
-definition. A boolean stream monotone in its previous value (a latch) is exactly a
-past-time formula of them, which the analyses read (:mod:`fretc.fretish.fret_since`): it is
-no stream here; nor is another boolean stream reading booleans and the tick's comparisons
-only, which ``fretc check``
-reads by its state bit (IR ``stream``: the requirements' expansions name no variable of it,
-so no requirement reads it as a variable here). Of the others (numeric streams, boolean
-ones reading a previous number), no expression of those variables' present values writes it, so the analyses
-read a comparison that reads it as they read a comparison reading a previous value
-(``preReal``): an independent proposition at each tick (an ``abstraction`` note names the
-stream), whose role in realizability is that of the variables its definition reads, by the
-rule every other atom follows (:mod:`fretc.check.realizability`: the controller's when one
-of them is an output, else the environment's). A variable its definition reads that is
-declared neither input nor output is named, with the stream reading it, as one a
-requirement reads is (FRET checks realizability only when every variable is declared).
-"""
+Design notes: ARCHITECTURE.md, `check/streams.py`."""
 
 from __future__ import annotations
 

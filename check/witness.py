@@ -4,31 +4,7 @@ A witness is a *finite* run, so it is built from the **ft** formulas (FRET's fin
 semantics, the one the audit's verdict uses) under FRET's trace model
 (``compiler/evaluate.py``): Spot finds an infinite word of
 
-    query & (!LAST U (LAST & X G (!LAST & absorbing)))
-
-where ``absorbing`` gives every atom its value in the absorbing state after the last tick
-(booleans false, numbers 0); the ticks up to ``LAST`` are the CSV rows. Comparisons get
-numbers back through :meth:`fretc.check.numeric_abstraction.NumericAbstraction.values`, and
-comparisons of several variables through z3, tick by tick (:mod:`fretc.check.atom_values`).
-
-What each witness shows (intended verdicts):
-
-* consistent set: every requirement satisfied, non-vacuously where the checks found that
-  possible;
-* conflict (minimal subset ``M``, last member ``v``): ``M - {v}`` satisfied with their
-  triggers firing, ``v`` violated;
-* vacuity of ``R`` forced by ``M``: ``R``'s trigger fires, ``M - {v}`` satisfied, ``v``
-  violated (``v`` the last member other than ``R``; ``R`` itself when ``M = {R}``);
-* unsatisfiable ``R``: ``R`` violated.
-
-The verdicts written in the header (``# expected: R1=satisfied, R2=violated``) are not the
-intended ones but those FRET's interval semantics gives on the written numbers, for every
-requirement of the checked files; when they differ from the intended ones (an uninterpreted
-atom made the abstraction spurious) the finding says so. That semantics is the audit's own
-evidence engine (:func:`fretc.monitors.interval.verdict_of`), a layer above this one
-(ARCHITECTURE.md: layers import downwards only), so the caller passes it in as a
-:data:`Judge` (``fretc check`` does).
-"""
+Design notes: ARCHITECTURE.md, `check/witness.py`."""
 
 from __future__ import annotations
 

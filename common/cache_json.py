@@ -2,28 +2,7 @@
 (:mod:`fretc.common.cache`): the parsed requirements of a ``.fret`` file, the parsed
 expressions of a binding file.
 
-Decoding runs no code but the listed classes' own construction without their ``__init__``
-(as pickle restores an object, but only for the classes a caller names, and only from
-JSON), so an entry cannot do more than describe a tree of those classes.
-
-The layout (a JSON value; every JSON object is a tag of one member):
-
-* ``null``, ``true``/``false``, numbers and strings: themselves (a float stays a float:
-  ``1.0``; ``NaN`` and ``Infinity`` as Python's :mod:`json` writes them);
-* a list: a JSON array;
-* ``{"t": [...]}`` a tuple, ``{"f": [...]}`` a frozenset, ``{"d": [[key, value], ...]}`` a
-  dict (any keys, in order), ``{"q": [numerator, denominator]}`` a
-  :class:`fractions.Fraction`;
-* ``{"c": NAME, "v": [...]}`` an instance of the listed class NAME: a dataclass with the
-  values of its fields in :func:`dataclasses.fields` order, or a named tuple with its items;
-* ``{"p": NAME}`` an object the caller maps to a name and back (an entity's key in a binding
-  file's trees, which must stay the very object of the file's ``[path_variables]``).
-
-Anything else (a set, a class not listed, a nesting too deep for Python's :mod:`json`) makes
-:func:`dumps` raise :class:`TypeError`, :class:`ValueError` or :class:`RecursionError`, and
-the caller then keeps nothing; :func:`loads` raises :class:`ValueError` on any layout it
-does not know (the caller's miss).
-"""
+Design notes: ARCHITECTURE.md, `common/cache_json.py`."""
 
 from __future__ import annotations
 

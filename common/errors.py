@@ -1,42 +1,6 @@
 """The exception tree of fretc, and diagnostics rendered like a compiler's.
 
-Every error fretc reports about its input derives from :class:`FretcError`, so one ``except
-FretcError`` (the ``fretc`` command's, exit code 2) catches the input errors of every stage;
-each stage has its own subclass (the model: Lark's one exception tree)::
-
-    FretcError                          where: Where | None
-    ├── FretishError                    requirement text and files (fretish/)
-    │   ├── FretishSyntaxError          a sentence that does not parse
-    │   ├── FretishFileError            a file's structure (ids, attributes, JSON)
-    │   ├── LimitError                  an input limit (fretish/limits.py)
-    │   ├── SemanticsError              formalization (compiler/semantics.py)
-    │   ├── CodegenError                no monitor (compiler/codegen.py)
-    │   └── AjpfError                   no AJPF property (compiler/ajpf.py)
-    ├── CheckError                      fretc check's inputs
-    │   └── RealizabilityError          (check/realizability.py)
-    ├── InputError                      the audit's inputs (common/problems.py)
-    │   ├── LogError ── CsvError        a log that cannot be read
-    │   ├── BindingError                a signal binding
-    │   ├── SignalError                 a binding that cannot be evaluated on a log
-    │   ├── FieldPathError              a field path the schema lacks (logs/schema.py)
-    │   └── AuditInputError ── RayUnavailable   (audit/config.py, audit/fleet/ray.py)
-    └── ReportError                     fretc report's inputs and output (reports/write.py)
-
-Internal errors are not input errors and stay outside the tree (a generated monitor that is
-not valid: ``compiler.codegen.InvalidMonitorError``, exit code 4), as do the signals by which
-an engine hands a requirement to another (``VectorizeError``, ``EvidenceUnsupported``) and
-private control-flow exceptions (``_Fail``, ``_Fallback`` ...).
-
-A :class:`FretishSyntaxError` renders as::
-
-    r1.fret:3:17: error: unexpected 'and' in an expression
-    R1: the sw shall always satisfy p and q
-                                      ^
-    expected: an operator, the end of the sentence
-    hint: FRETish writes conjunction as '&' ...
-
-Lines and columns are 1-based and in the coordinates of the file the text came from.
-"""
+Design notes: ARCHITECTURE.md, `common/errors.py`."""
 
 from __future__ import annotations
 

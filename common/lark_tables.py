@@ -10,17 +10,7 @@ entry is a miss, never decoded), and given back to Lark by ``Lark._load_from_dic
 point of Lark's standalone parser generator (``lark/tools/standalone.py``), which makes only
 Lark's rule and terminal classes from them.
 
-Start-up CPU of the FRETish parser (``bench/bench_lark_tables.py``): tables built in memory
-about 0.38 s, from this cache about 19 ms (Lark's pickle about 20 ms).
-
-A parser may also ship its tables with fretc (``shipped``: a JSON file of the installed
-package, as trusted as its code, written by :func:`tables_text`): on a miss of the cache (a
-first run, a new cache folder) they are read from there when they were made from the same
-grammar, options and Lark version (tables built in a first run cost 0.4 s of the 0.7 s of a
-first ``fretc FILE --emit monitor``), then kept in the cache; otherwise built. JSON keeps
-what marshal does by tags: a tuple is ``{"__t": [...]}``, a dict ``{"__d": [[key, value],
-...]}`` (its keys may be numbers), a list a list.
-"""
+Design notes: ARCHITECTURE.md, `common/lark_tables.py`."""
 
 from __future__ import annotations
 

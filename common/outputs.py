@@ -7,35 +7,7 @@ else (a CI workspace, ``/tmp``, a checked-out repository), and a symbolic link p
 under the name of an output (``D/T01.csv -> ~/.bashrc``) must not make fretc overwrite the
 file it points to; nor may a hard link to another file.
 
-* :func:`write_file` and :func:`open_output` write a temporary file beside the output,
-  created exclusively (``O_CREAT | O_EXCL | O_NOFOLLOW``, mode 0666 less the umask, as
-  ``open()`` would make the output), then rename it over the output's name (``rename(2)``
-  replaces the directory entry, a link included: it never writes through it). A reader sees
-  the old file or the whole new one; a failure leaves the old one and no temporary file.
-* A character device or a FIFO named by its own path (``-o /dev/null``) is written through,
-  as the shell's ``>`` writes it, and stays what it is (renaming over it, as root, made
-  ``/dev/null`` a regular file); a block device, a socket, or a link to one of those is
-  refused.
-* :func:`create_output` is for files written as they go (a recording): whatever is at the
-  name (a file, a link) is removed, and the file is created exclusively without following a
-  link (``O_EXCL | O_NOFOLLOW``, POSIX ``open()``: "If O_CREAT and O_EXCL are set, open()
-  shall fail if the file exists ... If the path names a symbolic link, open() shall fail").
-* :func:`output_folder` makes the folder the user named (following it when it is a link:
-  the user's choice); :func:`sub_folder` a folder fretc names inside it (``runs/``,
-  ``timelines/``), refused when a link or a file stands there; :func:`write_under` a file
-  at a path fretc names inside it (a ROS 2 package's files), its folders as
-  :func:`sub_folder` makes them.
-
-* :func:`refuse_replacing_inputs` is every command's check, before it reads or writes
-  anything, that no output it will write is one of its own inputs (``fretc shield-replay SH
-  d/a.mcap d/a.shielded.mcap -o d``, ``fretc audit runs/*.csv --write-csv runs``, ``--json``
-  naming a log or a requirement file): the paths compared resolved, links followed
-  (``os.path.realpath``), and hard links by ``os.path.samefile``; an output inside an input
-  that is a folder read whole (a rosbag2 folder) is one of its files.
-
-Errors are :class:`OutputError` (a :class:`fretc.common.errors.FretcError`, so the command
-exits 2 naming the path, and an :class:`OSError`, so callers that catch those go on doing so).
-"""
+Design notes: ARCHITECTURE.md, `common/outputs.py`."""
 
 from __future__ import annotations
 

@@ -1,26 +1,6 @@
 """Units of time: one duration grammar and the time formatters of every fretc output.
 
-Durations are written the same way in requirement files (``@tick_period 100 ms``,
-``tick_period: 10 Hz``) and in signal bindings (``period = "100 ms"``, ``nominal_rate =
-"10 Hz"``, ``--tick-period``)::
-
-    duration := number [spaces] unit
-    number   := digits ["." digits] | "." digits, optionally followed by an exponent e[+-]N
-    unit     := ns | nanosec[ond][s]
-              | us | µs | microsec[ond][s]
-              | ms | millisec[ond][s]
-              | s | sec[ond][s]
-              | min | mins | minute[s]
-              | h | hour[s]
-              | Hz                    (a frequency: the duration is its period, 1/f)
-
-Units are case-insensitive. A bare number is seconds only where the file format gives it a
-type (a TOML number in a binding file); as text it needs its unit. Durations inside FRETish
-sentences (``within 3 seconds``) follow the FRETish grammar (``fretish/grammar.lark``), not
-this one. Times in fretc are integer nanoseconds (ROS 2 ``builtin_interfaces/Time`` and MCAP
-log times are nanoseconds) or, for requirement files, exact :class:`fractions.Fraction`
-seconds.
-"""
+Design notes: ARCHITECTURE.md, `common/units.py`."""
 
 from __future__ import annotations
 

@@ -2,25 +2,7 @@
 Gwendolen BDI agents (Dennis et al., "Practical verification of decision-making in agent-based
 autonomous systems", ASE 2016; the MCAPL manual's property specification language).
 
-One ``label: formula`` line per requirement, from its ft_inf. AJPF syntax: ``[]`` (always),
-``<>`` (eventually), ``U``, ``R``, ``~``, ``&``, ``||``, ``->``; atoms ``B(agent, belief)``,
-``P(percept)``, ``D(agent, action)``. AJPF's operator precedence differs from LTL's, so every
-binary sub-formula is parenthesized. ``<->`` and ``xor`` are rewritten with ``->``, ``&`` and
-``||``. What AJPF cannot express (next, bounded and past operators, a comparison with no
-belief name, the constants TRUE/FALSE) is refused with the reason and what to write instead.
-A probability requirement (``with probability >= 0.95``) stops the whole output with a
-positioned error (:func:`refuse_probability`): AJPF has no probability operator.
-
-Variable mapping (TOML, ``--psl-map``)::
-
-    agent = "agilex_agent"          # default agent (otherwise the requirement's component)
-    [variables.too_close]
-    kind = "belief"                 # belief (default) | percept | action
-    name = "too_close"              # Gwendolen term (lower-case first letter)
-    agent = "agilex_agent"          # optional, for belief and action
-    [comparisons]
-    "(alt > 100)" = "high_altitude" # a comparison, as FRET prints it, becomes this belief
-"""
+Design notes: ARCHITECTURE.md, `compiler/ajpf.py`."""
 
 from __future__ import annotations
 

@@ -7,22 +7,7 @@ each requirement's **pt formula** (FRET's past-time formalization, the formula f
 monitors step), so R2U2's verdict at a tick is the pt verdict there and at the run's last
 tick FRET's finite-trace verdict. The translation, from the formula IR:
 
-* Boolean operators and comparisons as C2PO writes them (``!``, ``&&``, ``||``, ``xor``,
-  ``->``, ``<->``, ``==`` ...), arithmetic ``+ - * /``, ``mod`` as ``%``, ``^`` as ``pow``,
-  ``absReal`` as ``abs``; numbers as decimals (C2PO has no exponent notation);
-* ``Y p`` as ``O[1,1] p`` and ``Z p`` as ``H[1,1] p``, FRET's first timepoint as
-  ``H[1,1] false`` (MLTL's past intervals are cut at the first tick: ``O[1,1]`` is false
-  there, ``H[1,1]`` true);
-* bounded ``O``/``H`` as they are; the unbounded ``O``, ``H``, ``S``, ``T`` over ``[0,M]``, M
-  being C2PO's mission time (``--mission-time``: at least the run's ticks, where ``[0,M]``
-  reaches the first tick as the unbounded operator does).
-
-Not expressible in C2PO, so such a requirement is left out with the reason (the file lists
-it): ``minReal``/``maxReal``, ``preReal``/``preInt`` (no previous value of a number), an
-if-then-else of numbers, uninterpreted functions, infinite or NaN literals, and a pt formula
-that needs the future (no online monitor at all). FRET's ft (future-time) formulas are not
-written: they read ``LAST``, the end of the trace, which a streaming MLTL monitor cannot see.
-"""
+Design notes: ARCHITECTURE.md, `compiler/c2po.py`."""
 
 from __future__ import annotations
 

@@ -5,21 +5,7 @@ Per requirement file one header and one source (``safe_ros_monitors.h`` / ``.c``
 ``templates/c_monitors.c.j2``, and one ``runner.c`` for the folder (``templates/c_runner.c.j2``:
 the only ``main``; it reads the audit's CSV traces and prints each requirement's verdict).
 
-Each requirement's monitor is generated from the formula IR the Python monitors are made of
-(:mod:`fretc.compiler.codegen`): the pt formula's tick code (:mod:`fretc.compiler.c_step`, the
-C twin of :mod:`fretc.compiler.pt_step`), the same LTL3 automata of ft_inf
-(:func:`fretc.compiler.automata.ltl3_automata`) as constant tables, and the requirement's
-trigger formula for the audit's *vacuous* verdict
-(:func:`fretc.compiler.trigger.trigger_pt`). Its state is one
-struct of a size known here (``<P>_STATE_BYTES``, checked by the C compiler); ``step`` runs
-in constant time with no allocation, no recursion and no loop.
-
-What each monitor gives, as the Python monitors do: the pt verdict at every tick (``step``),
-the LTL3 verdict and its tick (``ltl3``, ``ltl3_tick``), FRET's finite-trace verdict at the
-end (``finish``), and the audit's word for the run (``verdict``: satisfied, vacuous, violated,
-unknown; :mod:`fretc.audit.finalize` and :mod:`fretc.audit.damage` for the rules at an unread
-tick).
-"""
+Design notes: ARCHITECTURE.md, `compiler/c_codegen.py`."""
 
 from __future__ import annotations
 

@@ -7,26 +7,7 @@ next values stored into the state. Time and memory per tick are constant and kno
 code is generated: no allocation, no recursion, no loop, no floating point unless the formula
 compares numbers.
 
-Bounded past operators (``O[lo,hi]``, ``H[lo,hi]``, ``H[lo,hi] p = !O[lo,hi] !p``):
-
-* ``lo = 0``: a counter of the ticks since the argument last held, capped at ``hi + 1``
-  (the Python monitors' counter);
-* ``lo > 0``: ``O[lo,hi] p`` is ``O[0,hi-lo]`` of ``p`` delayed by ``lo`` ticks (false
-  before the first tick, FRET's past-time semantics): a ring buffer of ``lo`` bits, then the
-  counter. The Python monitors keep the runs of ticks instead (same values:
-  tests/compiler/test_c_monitors.py).
-
-Every value the code reads from the state is copied into a local before any store (the
-stores come last, in :attr:`CStep.commits`), so the order of the stores does not matter.
-
-Numbers are IEEE 754 doubles; the arithmetic follows the Python monitors' rules (a division
-by zero, a ``mod`` by zero and a power that overflows or has no real value are NaN; ``min``
-and ``max`` return their first argument unless the second is smaller, resp. larger, as
-Python's do), in the helpers :data:`HELPERS` that a generated file defines when it uses them.
-
-Identifiers are generated (``in->v0``, ``n3``, ``s->c1``); a FRET name reaches the C text only
-in comments and string literals escaped by :func:`c_string`.
-"""
+Design notes: ARCHITECTURE.md, `compiler/c_step.py`."""
 
 from __future__ import annotations
 

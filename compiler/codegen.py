@@ -5,32 +5,7 @@ imports only the standard library and exposes ``MONITORS: dict[str, type]``; eac
 class has ``VARIABLES``, ``step(sample) -> bool``, ``status``, ``finish() -> bool`` and
 ``reset()`` (see the template's docstring).
 
-* ``step`` evaluates the pt formula with the Havelund-Rosu dynamic-programming scheme
-  (:mod:`fretc.compiler.pt_step`): constant time and memory per tick.
-* ``status`` follows the two deterministic LTL3 automata of ft_inf
-  (:mod:`fretc.compiler.automata`): a prefix with no run in ``bad`` is a bad prefix (no infinite
-  continuation satisfies ft_inf: *violated*), a prefix with no run in ``good`` a good prefix
-  (*satisfied*); otherwise *unknown* (LTL3; Bauer, Leucker & Schallhart, TOSEM 2011).
-
-Import cost: a module may hold thousands of requirements, and compiling Python source costs
-about a second per megabyte of code. So the code of ``reset``/``step`` is rendered per
-requirement from ``templates/monitor_shape.py.j2`` without the variable names (``K0``,
-``K1``, ... stand for ``VARIABLES[0]``, ...); requirements whose code is then equal share one
-entry of the module's ``_SHAPES``, kept as a string literal and compiled when the first
-monitor of that shape is made. Each requirement is one ``_monitor(...)`` call (its id, text,
-formulas, hash, variables, shape number), and LTL3 tables are text in ``_TABLES``, decoded on
-first use into tuples. Only code and read-only tables are shared: a monitor's state is its
-object's own.
-
-:func:`build_monitor_modules` returns, per requirement file, the module text with what was
-built for it (per requirement: the class name, the :class:`MonitorSource` the template was
-fed and the LTL3 automata), so a caller that runs the monitors in this process (the audit)
-needs neither to rebuild the automata nor to re-derive which module holds which requirement.
-
-Hostile input: requirement ids, texts and variable names reach the module only as Python
-string literals made by ``repr``; identifiers in the code are generated (``v0``, ``n3``,
-``Monitor_R1_0``), never copied from the requirement file.
-"""
+Design notes: ARCHITECTURE.md, `compiler/codegen.py`."""
 
 from __future__ import annotations
 

@@ -7,27 +7,7 @@ language. For alphabets of few letter classes (up to :data:`SUBSET_MAX_CLASSES`)
 powerset of Spot's nondeterministic monitor and its minimization are done here on letter
 tables:
 
-- the subset construction with state sets as integer bit masks, the successors of a set
-  looked up 16 NFA states at a time (memoized unions);
-- when the plain powerset grows beyond :data:`PRUNE_AFTER` sets, the construction starts
-  again with each new set *pruned* by direct simulation: when every state of the NFA is accepting
-  (a monitor), a state ``s`` simulated by a state ``t`` (every letter ``s`` reads leads to a
-  state simulated by one ``t`` reaches on the same letter) accepts a subset of ``t``'s words,
-  so a set holding both accepts what it accepts without ``s`` (Dill, Hu & Wong-Toi,
-  "Checking for language inclusion using simulation preorders", CAV 1991; the same pruning
-  as antichain-based determinization). The pruned powerset has the same language, often
-  100 times fewer states (``before m whenever c ... for 12 ticks``: 49,158 subsets, 15
-  pruned, 14 minimal);
-- Moore's partition refinement (Hopcroft and Ullman, "Introduction to Automata Theory",
-  section 3.4) vectorized with numpy.
-
-Spot's ``tgba_powerset`` + ``minimize_monitor`` compute the same automaton (the minimal DFA of
-a language is unique up to the names of its states, and
-:func:`fretc.compiler.spot_monitors._bfs_tables` renames them canonically) but take seconds where this
-takes milliseconds; ``tests/compiler/test_dfa.py`` compares the two.
-
-Tables: ``rows[state][letter]`` is the destination state or -1 (no transition: reject).
-"""
+Design notes: ARCHITECTURE.md, `compiler/dfa.py`."""
 
 from __future__ import annotations
 

@@ -2,39 +2,7 @@
 arithmetic terms inside comparisons. Every printer, evaluator and code generator reads it;
 nothing re-parses printed text (../shared/DESIGN.md, "One IR, many back ends").
 
-A node is ``Node(op, args, name, lo, hi)``:
-
-========================  ==========================================================
-``op``                    meaning
-========================  ==========================================================
-``true`` ``false``        constants
-``ap``                    boolean variable ``name``
-``LAST``                  true exactly at the last position of a finite trace (FRET)
-``FTP``                   true exactly at the first position (FRET's first timepoint)
-``cmp``                   comparison ``name`` in ``= != < <= > >=`` of two terms
-``call``                  boolean function ``name(args)`` left uninterpreted
-``!`` ``&`` ``|``         not, and, or (``&``/``|`` are binary)
-``xor`` ``->`` ``<->``    exclusive or, implication, equivalence
-``X``                     next (strong: false at the last position of a finite word)
-``F`` ``G``               eventually / globally, optional bounds ``[lo, hi]`` in ticks
-``U`` ``V``               until, release (``a V b`` = ``!(!a U !b)``)
-``Y`` ``Z``               previous (strong, false at 0) / weak previous (true at 0)
-``O`` ``H``               once / historically, optional bounds ``[lo, hi]`` in ticks
-``S`` ``T``               since, trigger (``a T b`` = ``!(!a S !b)``)
-``stream``                a FRET boolean stream ``name`` of booleans by its state bit
-                          (pt): ``(P, Q)``, true at ``t`` iff ``P`` when it was true at
-                          ``t-1``, else ``Q`` (false before the trace; ``a S b`` is
-                          ``(a | b, b)``); :mod:`fretc.fretish.fret_since`
-``var`` ``num``           numeric variable ``name``; numeric literal (text in ``name``)
-``arith``                 ``name`` in ``+ - * / mod ^`` on two terms; ``neg`` unary minus
-``fn``                    numeric function ``name(args)`` (``absReal``, ``preReal`` ...)
-``ite``                   numeric if-then-else ``(cond, then, else)``
-========================  ==========================================================
-
-Nodes are immutable and hashable, so evaluators can memoize on them. The constructors below
-apply only simplifications that preserve meaning on every trace (constant folding, double
-negation, and the identities FRET's own optimizer uses, e.g. ``p S (p & FTP) = H p``).
-"""
+Design notes: ARCHITECTURE.md, `compiler/ir.py`."""
 
 from __future__ import annotations
 

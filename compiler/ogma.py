@@ -1,34 +1,6 @@
 """FRET Component Specifications for NASA's Ogma (``fretc FILE --emit ogma``).
 
-Ogma (github.com/nasa/ogma) generates Copilot runtime monitors (cFS, ROS 2, F' applications)
-from the JSON file FRET exports per component with language "CoPilot"
-(``ogma cfs --input-file FILE`` and ``ogma ros --input-file FILE``; older Ogma:
-``--fret-component-spec FILE``). Its shape, as FRET's export template writes it and Ogma's
-``fcs`` input format reads it (``ogma-core/data/formats/fcs_smv``, ``fcs_lustre``: JSONPath
-``..Internal_variables[*]``, ``..Other_variables[*]``, ``..Requirements[*]``)::
-
-    {"<component>Spec": {
-        "Internal_variables": [{"name", "type", "assignmentLustre", "assignmentCopilot"}],
-        "Other_variables": [{"name": "x", "type": "bool" | "int" | "real"}],
-        "Functions": [],
-        "Requirements": [{"name": ID, "fretish": TEXT, "ptLTL": PT, "CoCoSpecCode": LUSTRE,
-                          "PCTL": ""}]}}
-
-Ogma reads ``ptLTL`` by default (``--prop-format smv``; FRET puts its pt formula there) and
-``CoCoSpecCode`` with ``--prop-format lustre``. fretc writes its pt formula as ``fretc FILE
---emit ltl`` prints it (FRET's syntax, FTP as ``(Z FALSE)``) and the Lustre of
-:mod:`fretc.compiler.cocospec`. Every variable a requirement reads is an entry of
-``Other_variables`` (the component's declared Inputs and Outputs first, types from the
-glossary, else from their use): fretc has no Copilot definition of an Internal variable, so
-none is written as one, and the monitor reads it as an input (said on stderr). Every name
-is the CoCoSpec contract's (:meth:`fretc.compiler.cocospec.Contract.lustre_name`: a Lustre
-keyword renamed, ``node`` -> ``node_v``), in ``Other_variables``, ``ptLTL`` and
-``CoCoSpecCode`` alike, and a requirement's ``name`` is its id on one line. Left out,
-with the reason: a requirement that did not formalize, a pt formula that needs the future,
-and one using what Ogma's SMV grammar has no form for (functions, ``mod``, ``^``, unary
-minus, an if-then-else of numbers, a number in exponent notation, a name that does not
-start with a letter: a quoted FRETish name).
-"""
+Design notes: ARCHITECTURE.md, `compiler/ogma.py`."""
 
 from __future__ import annotations
 

@@ -1,31 +1,7 @@
 """FRET's probabilistic form of a requirement: where FRET 3.1 puts the bounds, around fretc's
 own (FRET-exact) infinite-trace formula.
 
-FRET 3.1 formalizes a requirement ``with probability OP p`` by its probabilistic templates
-(``probabilisticSemantics.json``, one template per five-part key
-``scope,condition,probability,timing,response``; probability ``bound`` or ``null``, 8 x 3
-x 2 x 12 = 576 keys). The bound is **per trigger**: at each triggering point the templates
-name (the first point of each scope interval, each point where a ``regular`` condition
-becomes true or holds at an interval's first point, every point of a ``holding``
-condition), the timing's obligation from that point holds with probability ``OP p``; and the
-whole, ``P>=1 [ ... ]``, holds almost surely. Only the keys without scope and condition
-(``null,null,...``) put one bound around the whole path formula. A requirement without a
-probability has the key's ``null`` probability: ``P>=1`` at each trigger.
-
-FRET's own path formulas inside those templates contradict FRET's LTL (ft_inf) in 19 of the
-45 sentences of ``../shared/fretish/fret_probabilistic_vectors.jsonl`` (checked with Spot;
-docs/reference/semantics.md lists the template families and a trace that separates each).
-fretc keeps FRET's *placement* of the bounds and puts them around its own ft_inf: the same
-construction (:func:`fretc.compiler.semantics.construct`) with each occurrence of the
-timing's obligation wrapped in a bound node, so that removing the bounds gives back ft_inf
-exactly (tests/compiler/test_pctl.py, on FRET's vectors and all 576 keys).
-
-The bound node is ``Node("P", (path,), name=OP + p)`` (e.g. ``">=0.9"``); the printed form
-is PRISM's property syntax (``P>=0.9 [ F<=1 stopped ]``, PRISM manual, "The P operator"),
-names mangled as FRET prints them; ``=`` and ``!=`` bounds, which PRISM has not, print as
-FRET prints them (``P=0.5 [ ... ]``) and :func:`prism_property` writes them as PRISM's
-conjunction or disjunction of two bounds.
-"""
+Design notes: ARCHITECTURE.md, `compiler/pctl.py`."""
 
 from __future__ import annotations
 

@@ -3,25 +3,7 @@
 For each of FRET's 288 template keys (8 scopes x 3 condition kinds x 12 timings) this module
 builds, in the formula IR (:mod:`fretc.compiler.ir`):
 
-* **ft** - future-time LTL over finite traces, evaluated at position 0, with ``LAST`` true
-  exactly at the last position;
-* **ft_inf** - ft with ``LAST`` false everywhere (infinite traces), simplified;
-* **pt** - past-time LTL evaluated at the last position.
-
-The meaning is FRET's interval semantics (Giannakopoulou et al., "Automated formalization of
-structured natural language requirements", IST 2021; FRET's ``fretishSemantics`` manual;
-``../shared/fretish/README.md`` sections 2-4): the scope selects intervals of the run, the
-condition selects trigger points inside each interval, and the timing says what the response
-must do from each trigger until the interval ends. ``only*`` scopes negate the timing and
-apply it to the complement intervals. The construction here is compositional - scope
-wrapper (condition wrapper (timing)) - in the style of FRET's own templates, and is checked
-on traces against FRET's formulas and FRET's interval verdicts in the tests.
-
-FRET defects fixed here (../shared/fretish/README.md section 7): units are converted with
-the declared tick period instead of being dropped; decimal or inexact durations are
-rejected; ``preBool`` with a non-boolean initial value is an error; ``if A then B`` is
-``A -> B`` everywhere.
-"""
+Design notes: ARCHITECTURE.md, `compiler/semantics.py`."""
 
 from __future__ import annotations
 

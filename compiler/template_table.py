@@ -7,23 +7,7 @@ condition kind, timing, duration class) built with placeholder atoms, as
 (``python -m fretc.compiler.make_table``; ``tests/compiler/test_template_table.py`` fails when
 the files are not what that command writes). :mod:`fretc.compiler.instantiate` fills them in.
 
-A file holds (all lists, keys sorted):
-
-* ``key``: ``[scope, condition kind, timing, duration class]``, the class ``null`` (no
-  duration), ``0``, ``1`` or ``"n"`` (any ``n >= 2``);
-* ``ft``, ``ft_inf``, ``pt``: FRET/SMV texts (pt with FTP as ``(Z FALSE)``); ``ft_spot``,
-  ``ft_inf_spot``: Spot texts, ``null`` where Spot cannot print the formula. Each field
-  ``{i}`` stands for format field ``i``: the atoms (scope mode, condition, stop condition,
-  response) of ft (fields 0-3), of ft_inf (4-7) and of pt (8-11), then the duration's
-  bounds ``n - 2 .. n + 3`` (fields 12-17);
-* ``fallback``: the conditions under which a requirement must take the full build
-  (:mod:`fretc.compiler.fallback`, rule 2): a list of conjunctions, each a list of ``[0, f, g]``
-  (atom ``f`` equals atom ``g``), ``[1, f, node]`` (atom ``f`` equals the template node
-  ``node`` instantiated: a field number, or ``[op, name, lo, hi, [args]]`` with a bound
-  ``n + k`` as ``[k]``) and ``[2, k, v]`` (``n + k == v``).
-
-At run time a key's file is read on its first use and kept in memory (:func:`template`).
-"""
+Design notes: ARCHITECTURE.md, `compiler/template_table.py`."""
 
 from __future__ import annotations
 

@@ -6,22 +6,7 @@ loads it; loading Jinja and rendering cost about 40 ms of CPU at each start, the
 each time for unchanged requirements. The text is a function of what the templates are fed
 and of the code that feeds and renders them, so :func:`rendered` keys an entry by all of it:
 
-* the monitors' and skipped requirements' ``repr`` and the module name (the template's whole
-  input: :class:`fretc.compiler.codegen.MonitorSource` is a dataclass whose fields, automata
-  and IR atoms included, all appear in its ``repr``);
-* the text of every Jinja template of :mod:`fretc.templates` and of every module of
-  :mod:`fretc.compiler` (:mod:`~fretc.compiler.codegen`'s environment, filters, properties
-  and shape literals, and the code of the objects the templates read);
-* Jinja's and Python's versions (the text of Jinja's ``__init__.py``, which names its
-  version, read without importing Jinja).
-
-One entry per module name (``<cache>/monitor-text/<key>``), replaced by the next render of a
-module of that name, holding the SHA-256 of that key and of its payload (the text and each
-monitor's shape index, as JSON). An entry made from anything else, or damaged, is a miss: the
-module is rendered again (:mod:`fretc.common.cache`: the cache changes speed, never output).
-The text read from the cache is checked and loaded as a rendered one is
-(:func:`fretc.compiler.codegen.check_module`). ``FRETC_CACHE_DIR=""`` turns it off.
-"""
+Design notes: ARCHITECTURE.md, `compiler/text_cache.py`."""
 
 from __future__ import annotations
 

@@ -2,27 +2,7 @@
 Protocol 3.17, with ``pygls``). What it knows of a document is :mod:`fretc.editor.document`'s,
 of the workspace :mod:`fretc.editor.workspace`'s:
 
-* diagnostics, published when a document is opened, changed or saved: syntax and file
-  errors at their line and column with the CLI's messages, formalization errors, variables
-  that the bindings file beside the document does not bind, a variable read as a boolean in
-  one requirement and as a number in another (in this file or another of the workspace) or
-  bound to the other type; on save also ``fretc check``'s conflicts, unsatisfiable and vacuous
-  requirements, in a job of its own (:mod:`fretc.editor.jobs`: at most
-  :data:`fretc.editor.jobs.CHECK_SECONDS`, cancelled by the next edit);
-* hover on a variable: its binding's expression, type and unit, and how the requirements
-  read it; on a requirement: its template key, ft_inf, ft and pt and its diagram;
-* completion: the components the document names, the variables of the bindings (with their
-  type and unit) and FRETish's words (components first after a condition);
-* go to definition from a variable to its binding, from a parent id to its requirement;
-* find references and rename of a variable (requirement files and bindings files of the
-  workspace) and of a requirement id (its ``ID:`` line and the ``parent:`` lines);
-* a code action on a requirement whose wording differs from the saved one: ``fretc
-  distinguish`` between the two (command ``fretc.distinguish``, in a job);
-* document symbols: the requirement ids.
-
-The standard input is read with bounds (:mod:`fretc.editor.transport`); a document the server
-cannot read gives a diagnostic, never an exit: every handler catches what the analysis raises.
-"""
+Design notes: ARCHITECTURE.md, `editor/server.py`."""
 
 from __future__ import annotations
 

@@ -1,26 +1,7 @@
 """The definitions of a FRET glossary's Internal variables and modes, expanded for the
 analyses.
 
-FRET reads an Internal variable as its definition (its ``assignment``, in FRET's Lustre
-subset: :mod:`fretc.fretish.lustre`) when it checks realizability, so a requirement reading
-``roll_hold`` is about ``autopilot_engaged and not hdg_hold``. :func:`definitions` gives, for
-one component's variables, each Internal variable's expression with the Internal variables
-it reads replaced by theirs (a literal is that constant), and, for each one fretc keeps as a
-free variable, why: a definition outside the subset, or one that reads itself (through
-``pre``: ``psiAtZero`` is ``Psi -> if ... then Psi else pre psiAtZero``, a stream with state
-that no expression of the variables' present and past values without it writes), or that
-reads such a variable. Those streams with state are listed apart too (``streams``): the
-expansions keep them free (``fretc check`` gives a comparison reading one the role of the
-variables its definition reads: :mod:`fretc.check.streams`), the audit and the runtime
-monitors compute them tick by tick (:mod:`fretc.fretish.fret_streams`); but a boolean one
-monotone in its own previous value (a latch: ``false -> (enter or (pre m and not exit))``)
-is exactly the past-time formula ``P S psi``, and the analyses' expansions are that formula
-(:mod:`fretc.fretish.fret_since`). A Mode with a mode requirement (FRET's glossary: the condition under
-which the component is in that mode, a FRETish condition) is that condition, so ``in M mode``
-is the intervals where it holds. The expansions are what ``fretc check``, ``fretc shield`` and ``fretc
-testgen`` analyse (:func:`fretc.fretish.fret_variables.with_fret_definitions`); the formulas
-fretc prints keep the variable's name, as FRET's ft and pt do.
-"""
+Design notes: ARCHITECTURE.md, `fretish/fret_definitions.py`."""
 
 from __future__ import annotations
 

@@ -10,20 +10,7 @@ reading the variables its definition reads through ``pre`` (:mod:`fretc.check.st
 ``fretc shield`` refuses it by name. The audit and the runtime monitors
 compute it, as a Lustre node does (the Lustre of Kind 2 / CoCoSpec that FRET generates):
 
-- at each tick, each variable of the system is its definition over this tick's values of
-  the variables it reads, in an order where a variable reads those before it only outside
-  ``pre`` (Lustre's causality rule; a cycle outside ``pre`` is refused by the reader);
-- ``a -> b`` is ``a`` at the trace's first tick and ``b`` after (``ite(FTP, a, b)``);
-- ``pre e`` is ``e`` at the previous tick; at the first tick, where Lustre leaves it
-  undefined (``nil``, which a definition guards with ``->``), FRET's reading
-  (``preBool(false, e)``, ``preReal(0, e)``: :mod:`fretc.fretish.lustre`) gives ``false`` or
-  ``0``.
-
-:func:`stream_system` gives the :class:`StreamSystem` of the stream variables a requirement
-reads, with the definitions they read expanded: the variables it reads from outside are its
-``inputs`` (read from the log, or the monitor's inputs). The code that computes it is the
-compiler's (:mod:`fretc.compiler.stream_code`).
-"""
+Design notes: ARCHITECTURE.md, `fretish/fret_streams.py`."""
 
 from __future__ import annotations
 

@@ -1,29 +1,6 @@
 """FRET's variable declarations in its exports.
 
-FRET 3.0 exports a project's requirements with its variables (``{"requirements": [...],
-"variables": [...]}``, the form of FRET's case studies, ``*_reqts_and_vars.json``). A FRET
-variable, as FRET's Analysis Portal declares it, is an object with ``variable_name``,
-``component_name`` (variables are declared per component), ``idType`` (``Input``,
-``Output``, ``Internal``, ``Mode``, ``Function``; ``""`` not declared yet) and ``dataType``
-(``boolean``, ``integer``, ``unsigned integer``, ``single``, ``double``), an Internal
-variable's ``assignment`` (a Lustre expression defining it) and a Mode's
-``modeRequirement``. The export also lists the ports of an imported Simulink model
-(``modeldoc: true``, ``portType``): those are no FRET variables and are skipped.
-
-fretc takes a component's Input and Output variables as the ``@inputs``/``@outputs`` of its
-requirements (``fretc check``'s realizability, ``fretc shield``). An Internal variable is its
-definition, as FRET's realizability reads it, for the analyses (``fretc check``, ``fretc
-shield``, ``fretc testgen``; :func:`with_fret_definitions`): a literal (FRET's case studies:
-``ap_standby_state`` is ``3.0``) is that constant, a Lustre expression
-(``roll_hold`` is ``autopilot_engaged and not hdg_hold``, ``0.0 -> pre xin``) its FRETish
-reading with the Internal variables it reads expanded (:mod:`fretc.fretish.lustre`,
-:mod:`fretc.fretish.fret_definitions`); the formulas fretc emits keep the variable's name,
-as FRET's ft and pt do. A definition that reads itself through ``pre`` (a stream with
-state) is computed tick by tick by the audit and the runtime monitors (``streams``:
-:mod:`fretc.fretish.fret_streams`). What it does not take (such a stream in the analyses,
-a definition outside the subset: a free variable; a Mode's requirement; an integer type,
-the numbers being reals) is named by :func:`unused`, never silently dropped.
-"""
+Design notes: ARCHITECTURE.md, `fretish/fret_variables.py`."""
 
 from __future__ import annotations
 

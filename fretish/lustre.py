@@ -8,35 +8,7 @@ manual, "Variable Mapping" and "Realizability Checking"; the Lustre of Kind 2 / 
 :func:`parse_definition` reads that subset into :mod:`fretc.fretish.ast` expressions, with the
 same meaning:
 
-- ``and``, ``or``, ``xor``, ``not``, ``=>``, ``=``, ``<>``, ``<``, ``<=``, ``>``, ``>=``,
-  ``+``, ``-``, ``*``, ``/``, ``mod``, unary ``-``, ``true``/``false``, numbers, names,
-  ``f(args)`` (a function the glossary declares), parentheses;
-- ``if c then a else b`` is ``ite(c, a, b)``;
-- ``a -> b`` (``a`` at the first tick, ``b`` after) is ``ite(FTP, a, b)``, ``FTP`` being FRET's
-  first time point of the trace (a Lustre node's first instant);
-- ``pre e`` (``e`` one tick earlier) is ``preBool(false, e)`` for a boolean ``e`` and
-  ``preReal(0, e)`` for a number: FRET's functions of the previous value, whose value at
-  the first tick Lustre leaves undefined (``nil``) and a definition guards with ``->``; a
-  definition that reads itself through ``pre`` is a stream with state, computed tick by
-  tick where fretc computes it (:mod:`fretc.fretish.fret_streams`).
-
-Precedence (Lustre V6's, lowest first): ``if``, ``->`` (right), ``=>`` (right), ``or``
-``xor``, ``and``, comparisons, ``not``, ``+ -``, ``* / mod``, unary ``-`` and ``pre``.
-``=`` and ``<>`` between truth values are ``<->`` and ``xor``. Types: a comparison, a logical
-operator and ``true``/``false`` are boolean; a name is what
-the glossary's ``dataType`` says (``boolean``, else a number); ``ite``, ``->`` and ``pre``
-take their operands'. ``div``, ``when``, ``current``, ``fby`` and the rest of Lustre are
-refused (:class:`LustreError`), so a definition fretc cannot read stays a free variable and
-the notes say so; so is a Lustre comment (``--``, ``(*``, ``/*``, ``//``: the text is one
-expression, and ``a --b`` is ``a`` to Lustre, not ``a - (-b)``) and a number of more than
-:data:`fretc.fretish.limits.MAX_NUMBER_CHARS` characters.
-
-:func:`print_definition` writes a definition back as Lustre, from the same reading: fully
-parenthesized, each variable renamed as its caller names it, numbers in Kind 2's forms; the
-exports that write definitions into Lustre (``--emit cocospec``, ``--emit ogma``) write only
-that text, never the assignment as it came (a ``;``, a comment or a keyword in it would
-change the file's structure).
-"""
+Design notes: ARCHITECTURE.md, `fretish/lustre.py`."""
 
 from __future__ import annotations
 

@@ -8,19 +8,7 @@ of first appearance, and the one over all entities) equal ``fretc audit``'s of t
 messages by construction. No live ``pt``/``ltl3`` events are made for them (their monitors
 are not stepped while watching); their ``final`` events are.
 
-Memory stays bounded: the messages are on disk, not in memory (as many bytes as those topics
-carried in the run), and at most :data:`fretc.audit.entities.log.MAX_ENTITIES` entities of a key
-are judged (past it, the audit's error verdict says how many were left unjudged). The file is
-deleted once judged.
-
-A topic they read that the server did not advertise, or cannot be decoded, makes them
-``error`` (as the watch's other requirements), never ``vacuous`` over no entity.
-
-Damage: the kept messages are those the watch used; a run with a gap or a cut (``partial``,
-from :attr:`~fretc.audit.verdict.LogAudit.damage_time_ns`) is never a pass over what it
-lost: a per-entity verdict stays ``violated`` only when its first violation is before the
-damage, ``error`` stays ``error``, every other becomes ``unknown`` naming the damage.
-"""
+Design notes: ARCHITECTURE.md, `live/entities.py`."""
 
 from __future__ import annotations
 

@@ -9,31 +9,7 @@ log-time order (equal times in arrival order): a message overtaken by less than 
 reaches the watch in order; one later than that is still skipped and reported. The hold is
 the latency a verdict gains on these transports.
 
-**The watermark.** A transport that knows, for each topic, which writers its subscription
-is matched with, and which writer sent each message (DDS: the reader's matched publications
-and each sample's publication handle, :mod:`fretc.live.dds.client`), releases earlier: each
-writer's messages come in log-time order (its source timestamps, in the order it wrote
-them), so once every matched writer of every topic has delivered a message, no message still
-to come from them is older than the oldest of their latest ones, the *watermark*; the held
-messages at or before it are released at once (:meth:`MergeBuffer.sync`). A matched writer
-that has delivered nothing yet (a publisher that appeared, or one that is silent since the
-watch started) leaves the watermark undefined, and a writer that stopped sending holds it
-back: then the hold alone releases, as without a watermark. What the watermark cannot know
-is a writer the transport was not yet matched with at the last :meth:`sync`: its first
-messages can be older than what was released. A writer already writing when it is
-discovered (a node that started while the watch runs) is matched with the reader a little
-after its publication is known, and its first samples come once it is; the stored samples a
-latched (transient-local) writer sends on matching can be of any age. So the DDS client
-syncs with ``matched`` None (the hold alone) while it reads a latched topic or while a
-publication it discovered is not matched yet; a writer on a host whose clock is behind the
-watch's by more than a poll can still have its first messages skipped
-(``clock_backwards``) where the hold would have ordered those overtaken by less than the
-hold. Writers stay counted until the
-transport says their topic's publishers are all gone (:meth:`MergeBuffer.forget`), after
-their last messages were put. Source of the rule: the low watermark of stream processing
-(Akidau et al., "The Dataflow Model", VLDB 2015), per writer as DDS orders samples per writer
-(DDS 1.4 §2.2.2.5.1.9, ``BY_SOURCE_TIMESTAMP``).
-"""
+Design notes: ARCHITECTURE.md, `live/merge.py`."""
 
 from __future__ import annotations
 

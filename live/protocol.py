@@ -5,29 +5,7 @@
 (:mod:`fretc.live.websocket.foxglove`) was the first transport and its events are the
 protocol's; rosbridge, DDS and Zenoh put the same tuples.
 
-Events, each a tuple whose first item names it:
-
-* ``("connected", wall_ns, subprotocol, server_name)``
-* ``("advertise", wall_ns, [Advertised, ...])``
-* ``("unadvertise", wall_ns, [topic, ...])``
-* ``("message", topic, log_time_ns, payload_bytes, wall_ns)``
-* ``("disconnected", wall_ns, reason)`` (also when a connection attempt fails)
-* ``("closed", wall_ns, reason)``: the server closed the connection in order (a WebSocket
-  close frame, RFC 6455 section 5.5.1: the end of its run, e.g. ``fretc replay --serve``
-  finishing); not retried
-* ``("status", wall_ns, level, text)``
-* ``("protocol", wall_ns, detail)``: a frame of the wrong shape (valid JSON that is not an
-  object, a field of the wrong type, a truncated ``messageData``, more channels than
-  :data:`MAX_OTHER_CHANNELS` no requirement reads): ignored, the session goes on
-* ``("gave_up", wall_ns, reason)``: :data:`~fretc.live.websocket.session.MAX_HOSTILE_SESSIONS`
-  connections in a row sent frames of the wrong shape and dropped without a message: not
-  retried
-
-* ``("server", wall_ns, name)``: the server's name (the Foxglove protocol's ``serverInfo``)
-
-DDS and Zenoh put an ``unadvertise`` when a topic's last publisher leaves (DDS liveliness,
-Zenoh liveliness tokens), behind the messages it sent (:mod:`fretc.live.merge`).
-"""
+Design notes: ARCHITECTURE.md, `live/protocol.py`."""
 
 from __future__ import annotations
 

@@ -3,26 +3,7 @@
 wire, rmw_zenoh's key expressions, liveliness tokens and attachments, and the ``ros2msg``
 advertisement of a ROS type the watch decodes with :func:`fretc.logs.schema_decoder`.
 
-Sources of the rules:
-
-* DDS (ROS 2 design article "Topic and Service name mapping to DDS"; rosidl_generator_dds_idl):
-  a ROS topic ``/a/b`` is the DDS topic ``rt/a/b``; a type ``pkg/msg/Type`` is the IDL struct
-  ``pkg::msg::dds_::Type_``; samples are CDR (XCDR1) with their 4-byte encapsulation header.
-* Zenoh (rmw_zenoh's ``docs/design.md``, "Topic and Service name mapping to Zenoh key
-  expressions"): a message of topic ``/a/b`` in domain ``D`` is put on the key expression
-  ``D/a/b/pkg::msg::dds_::Type_/RIHS01_<sha256>`` (the type hash of REP 2011); the payload is
-  the same CDR; the attachment carries the publisher's sequence number (int64 LE), the source
-  timestamp (int64 LE, ns since the epoch) and its 16-byte GID (a length byte, then the bytes).
-  Graph entities are liveliness tokens ``@ros2_lv/D/<zid>/<nid>/<eid>/<kind>/<enclave>/
-  <namespace>/<node>/<topic>/<type>/<hash>/<qos>``, kind ``MP`` a publisher, ``MS`` a
-  subscription, names with ``/`` written ``%`` (an empty one ``%``).
-* zenoh-bridge-ros2dds (eclipse-zenoh/zenoh-plugin-ros2dds: its README and its liveliness
-  key formats), which routes a DDS robot's topics over Zenoh (``?layout=bridge`` in the
-  URL): a message of topic ``/a/b`` is put on the key expression ``a/b`` (the bridge's
-  namespace, ``-n /ns``, in front: ``ns/a/b``), with the same CDR payload and no attachment;
-  each routed publisher is a liveliness token ``@ros2_lv/<zid>/MP/<key>/<type>/<qos>`` with
-  ``/`` in the key and in the type ``pkg/msg/Type`` written ``§``.
-"""
+Design notes: ARCHITECTURE.md, `live/ros2_names.py`."""
 
 from __future__ import annotations
 

@@ -2,37 +2,7 @@
 
 ``open_log(path)`` (:mod:`fretc.logs.factory`) picks a reader by what ``path`` is:
 
-* ``*.mcap`` — any MCAP profile (:mod:`fretc.logs.mcap.source`).  Messages on channels
-  with ``cdr`` (ROS 2) or ``ros1`` message encoding are deserialized with rosbags types built
-  from the schema *embedded in the file* (``ros2msg``, ``ros2idl``, ``ros1msg`` schema
-  encodings; MCAP spec, "Well-known encodings"; :mod:`fretc.logs.decoding`).  Chunk
-  CRCs and the data-section CRC are checked.  A file with a valid footer and summary is read
-  through its chunk indexes; a file without one (a crashed recording) is read record by
-  record from the start, as far as it goes (:mod:`fretc.logs.mcap.integrity`).
-* ``*.bag`` — a ROS 1 bag (rosbags.rosbag1), types from the connection headers; without its
-  index it is read record by record (:mod:`fretc.logs.ros.ros1_linear`).
-* a folder with ``metadata.yaml`` — a rosbag2 bag (rosbags.rosbag2, sqlite3 or mcap storage),
-  types from the definitions stored in the bag (or a fallback typestore, see ``open_log``)
-  (:mod:`fretc.logs.ros.bags`).
-* ``*.csv`` — a trace of FRET variables: a header row of variable names, one row per tick
-  (:mod:`fretc.logs.csv.source`).
-* ``*.ulg`` — a PX4 ULog (pyulog; :mod:`fretc.logs.flight.ulog`); ``*.bin`` — an ArduPilot
-  DataFlash log (pymavlink; :mod:`fretc.logs.flight.dataflash`).
-
-Each format family is a subpackage (:mod:`.mcap`, :mod:`.ros`, :mod:`.flight`, :mod:`.csv`)
-that imports only the shared modules at this package's top (:mod:`.base`, :mod:`.decoding`,
-:mod:`.field_select`, :mod:`.reorder`, :mod:`.recorded_gaps`, :mod:`.schema`), and MCAP
-also :mod:`.ros` (a ROS 2 channel's CDR).
-
-Every source gives :class:`Message` tuples in non-decreasing log time, streaming: memory does
-not grow with the length of the log (:mod:`fretc.logs.base`; the passes without an
-index restore log-time order with :mod:`fretc.logs.reorder`).  Damage is recorded as
-:class:`~fretc.common.problems.DataProblem` in ``source.problems`` and reading goes on; see
-:class:`LogSource`.
-
-Times are integer nanoseconds since the epoch of the recording clock (MCAP ``log_time``,
-rosbag ``timestamp``).
-"""
+Design notes: ARCHITECTURE.md, `logs/__init__.py`."""
 
 from __future__ import annotations
 

@@ -2,23 +2,7 @@
 damage of a recording a shield was replayed over, carried by the shielded recording
 (``fretc shield-replay``: :data:`REPLAY_LIBRARY`).
 
-A watch knows what its recording cannot show: the connection was lost for a while, a
-publisher left (its topic unadvertised) and came back, or left for good while the run went
-on. The watch judges the variables of the topics such a gap may have held unknown inside it
-(to the end of the run for a topic gone for good: :mod:`fretc.live.absence`). The recording writes
-them in an MCAP Metadata record (MCAP spec, "Metadata": a name and a map of strings) named
-:data:`GAPS_METADATA`, whose ``gaps`` entry is a JSON list of ``{"start", "end", "topics",
-"cause"}`` (log times in ns, ``start`` null from the start of the run; ``topics`` null for
-every topic), and :class:`fretc.logs.McapSource` reads them back as gaps of the log, so that
-``fretc audit`` of the recording gives the watch's verdicts (../shared/DESIGN.md, "Damage is
-a gap"). A recording whose record cannot be read is a data problem of the log, never a
-crash, and its gaps are not used.
-
-A shielded recording (:mod:`fretc.shield.replay`) made from a damaged recording holds the
-intact span alone, and carries the damage in the same record: one gap from the damage's log
-time to the end of the run (:data:`RUN_END`, every topic, its cause the reader's problem
-kind), so that its audit, then or later, is partial there and judges no tick past it.
-"""
+Design notes: ARCHITECTURE.md, `logs/recorded_gaps.py`."""
 
 from __future__ import annotations
 

@@ -3,41 +3,7 @@ three-valued reading (:mod:`fretc.monitors.three_valued`) leaves it open, over a
 chunk of ticks at a time (:class:`CompletionsStream`); judging a whole trace is feeding it one
 chunk (:func:`decide`).
 
-Kleene's reading is sound but not complete: an unknown value read twice in one formula
-(FRET's ``in m`` reads ``m`` at the mode's entry and at its exit) is two independent unknowns
-to it, so it can call a verdict unknown that every completion of the trace agrees on. With
-``in m the sw shall always satisfy y``, ``m`` true and ``y`` false at tick 0 and ``m`` unknown
-at tick 2, every completion violates the requirement at tick 0, yet Kleene's pt is unknown:
-a violation the data show would be hidden.
-
-The pt formula is run tick by tick over the set of its states (the values its temporal
-operators keep: ``Y Z`` their operand's last value, ``S T O H`` their own, a bounded ``O H``
-its operand's last values: :class:`_Program`), every unknown leaf at an unknown tick standing
-for both of its values (the leaves: the nodes outside the formula's boolean and temporal
-skeleton, :func:`fretc.monitors.three_valued.leaves_of`, their values Kleene's, independent of
-each other), from the first to the last tick where a leaf is unknown or a gap tick lies
-(:attr:`fretc.monitors.three_valued.KleeneStream.free`: found by a reading before). States are
-merged as they meet, so the set stays small. At a gap tick (one tick or more, how many not
-known) every state further ticks of the gap lead to is added. In three stretches of the trace:
-
-1. **before the first**: the values the program's state reads at the tick before it (each
-   temporal operator's operand or own value, a bounded window's last values) are kept from
-   chunk to chunk;
-2. **from the first to the last**: the states are stepped with every value of the unknown
-   leaves, their count and the work bounded (:class:`TooManyStates`);
-3. **after the last**: each state is written as the temporal operators' carried state of
-   :func:`fretc.monitors.three_valued.kleene_values` (a completion's values are definite:
-   ``+inf`` or ``-inf``; a leaf that reads earlier ticks given its values) and the formula
-   evaluated from it over the rest of the trace; its value at the last tick is that
-   completion's verdict.
-
-Reading the leaves as independent admits more completions than the trace's variables can
-give (``x > 1`` and ``x > 2`` both free), so a verdict is what every completion gives, never
-a guess: True or False only when all of them agree, None when they differ. This is the subset
-construction (Rabin and Scott 1959) over the past-time formula's own state, the exact
-three-valued reading of LTL3 (Bauer, Leucker, Schallhart, TOSEM 2011) for FRET's finite-trace
-semantics.
-"""
+Design notes: ARCHITECTURE.md, `monitors/completions.py`."""
 
 from __future__ import annotations
 

@@ -4,32 +4,7 @@ judge shows, only what lies in the ticks read (../shared/DESIGN.md, "Damage is a
 evidence, never the end"), in memory that does not grow with the trace's ticks
 (:class:`DefiniteStream`); a whole trace is one chunk (:func:`definite_evidence`).
 
-:class:`DefiniteStream` feeds an :class:`~fretc.monitors.interval.IntervalStream` each chunk's
-signals with their unknown ticks set to meet the obligation (``favour``), so it lists the
-failed triggers the known ticks make, in trigger order. Alongside it:
-
-* **the definite triggers** are counted as each chunk's trigger points pass (the
-  stream's ``on_triggers``): a trigger is definite when the scope mode is known over the
-  ticks that place it in its interval and the condition is known where it fires
-  (:meth:`fretc.monitors.unknowns.Unknowns.in_scope_known` and ``trigger_known``; every
-  range ends at the trigger, so the ticks read so far decide it). Where the condition is
-  known at a tick and the tick before, its favoured value is its value, so the stream's
-  trigger points are the trace's there;
-* **the unknown ticks of each part** (scope mode, condition, response, stop condition) and
-  the gap ticks (each one tick or more, how many not known) are kept as runs of ticks, so
-  that at the end each listed failed trigger is kept only when its interval's bounds, its
-  trigger and its missed obligation are known in every completion and every count of the
-  gaps' ticks (:class:`~fretc.monitors.unknowns.Unknowns`' own tests, asked of the runs: a
-  ``for`` obligation missed across a gap tick may lie past the duration).
-
-Its ``holds`` and ``vacuous`` are the caller's: the three-valued verdict decides them
-(:mod:`fretc.monitors.completions`); a requirement that holds with no definite trigger is
-vacuous.
-
-Memory: the interval stream's, and two ticks per run of unknown ticks: at most
-:data:`MAX_RUNS` runs a part (past them the stream says :attr:`DefiniteStream.too_many`, and
-the caller judges the trace whole).
-"""
+Design notes: ARCHITECTURE.md, `monitors/definite.py`."""
 
 from __future__ import annotations
 

@@ -3,29 +3,7 @@ time: the obligation part of :class:`fretc.monitors.interval.IntervalStream` (FR
 semantics, ``../shared/fretish/README.md`` section 4; each timing's obligation, window,
 violation tick and reason as :data:`fretc.monitors.obligations.OBLIGATIONS` words them).
 
-* **Bounded timings** (``immediately``, ``next``, ``within``, ``for``, ``after``: :class:`Bounded`)
-  decide a trigger ``t`` from the first tick at or after ``t`` (``t+1`` for ``next``) where
-  their event holds (``R``, ``!R`` or ``R != want``), its deadline (``t``, ``t+1``, ``t+k``,
-  ``t+k+1``) and the interval end; a trigger waits (its tick, time, and the first event
-  seen) until the trace reaches its deadline or its interval closes: at most ``k + 1`` of
-  them wait.
-* **The other timings** (:class:`Group`): the triggers waiting in the open interval share
-  their fate, so they are one group: a count and the first ``limit`` (tick, time) pairs.
-  ``eventually``/``null`` (``R``), ``always`` (``!R``), ``never`` (``R``) either clear the
-  group at their event and fail it when the interval closes, or (``only*`` scopes for
-  ``eventually``, the plain scopes for ``always``/``never``) fail it at their event;
-  ``until``/``before`` fail it at one event (``R != want`` outside ``S``, or ``S``) and clear
-  it at another (``S``, or ``R == want``), which also ends the windows of the triggers that
-  failed since; ``finally`` fails the group at the interval end if ``R`` there is not what it
-  wants.
-* **Violations** are found in trigger order; the first ``limit`` are kept as records until
-  their interval closes (a :class:`~fretc.monitors.evidence.Violation` names its interval
-  end, and some windows end there), then made with their reason (:func:`_reason`) by the
-  :class:`Ledger`.
-
-All of it is vectorized with numpy over a chunk's ticks: never a Python loop over ticks or
-triggers, Python work per violation only for those listed.
-"""
+Design notes: ARCHITECTURE.md, `monitors/interval_fates.py`."""
 
 from __future__ import annotations
 

@@ -4,21 +4,7 @@ trigger points of each of many traces laid end to end in columns
 them one trace at a time (``intervals``, ``triggers``; ``../shared/fretish/README.md``
 sections 2-3, :mod:`fretc.monitors.interval`'s points 1 and 2).
 
-A scope interval is a maximal run of the ticks "inside" the scope, each trace apart: ``null``
-every tick; ``in`` the ticks of the mode ``M``, ``notin``/``onlyIn`` those of ``!M``;
-``before`` the ticks before the first ``M``; ``onlyBefore`` from the first ``M`` on;
-``after`` from the first tick after the first run of ``M`` (none when that run reaches the
-trace's end: no such tick); ``onlyAfter`` up to the end of the first run of ``M`` (every
-tick when there is none). The trigger points of an interval: its first tick (``null``
-condition), every tick where ``C`` holds (``holding``), every tick where ``C`` becomes true
-or holds at the interval's first tick (``regular``). Each trace is read from its own first
-tick: nothing is carried from one trace to the next.
-
-The mode and condition are evaluated per tick, so this takes those without a temporal
-function and without ``FTP`` (whose values depend on a trace's start and end): None
-otherwise, and the caller counts one trace at a time. Tested equal to the interval semantics
-trace by trace (``tests/monitors/test_interval_traces.py``).
-"""
+Design notes: ARCHITECTURE.md, `monitors/interval_traces.py`."""
 
 from __future__ import annotations
 

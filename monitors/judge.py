@@ -3,27 +3,7 @@ over the columns of a trace (one value per tick per FRET variable).
 
 The audit (and a watch at the end of its run) asks :func:`judge` and nothing else:
 
-* **FRET's finite-trace verdict and its evidence** come from FRET's interval semantics
-  (:func:`fretc.monitors.interval.evaluate_requirement`: scope intervals, triggers, the first
-  violated obligation; ../shared/fretish/README.md sections 2-4). Where that semantics cannot
-  evaluate the requirement (uninterpreted functions), the verdict is the requirement's pt
-  formula evaluated over the columns (:func:`fretc.monitors.vectorized.pt_series`; FRET's
-  pt formula at the last tick is its finite-trace verdict), and where that is impossible too,
-  the generated monitor replayed over the columns (:mod:`fretc.monitors.stepwise`).
-* **The robustness** (the margin behind the verdict) is the pt formula's space robustness over
-  the same columns (:func:`fretc.monitors.robustness.robustness`); its sign is the
-  verdict's. None where the pt formula cannot be evaluated over columns.
-* **The LTL3 verdict** (Bauer, Leucker, Schallhart, TOSEM 2011: the earliest tick after which
-  every continuation of the trace satisfies, or every one violates, the infinite-trace
-  formula ft_inf) comes from the requirement's deterministic monitor automata run over the
-  columns (:func:`ltl3_verdict`), or from the generated monitor
-  replayed when its automata have no tables. A requirement without an online monitor (a
-  future-time function in its pt formula) has none: ``"unknown"``. :class:`Ltl3Stream`
-  gives the same verdict over a trace fed a chunk of ticks at a time.
-
-The generated monitors themselves are for ``--emit monitor`` and ``fretc watch``; the tests
-cross-check them, the vectorized pt engine and this judge on random traces.
-"""
+Design notes: ARCHITECTURE.md, `monitors/judge.py`."""
 
 from __future__ import annotations
 

@@ -4,23 +4,7 @@ on, and evidence that lies in the ticks read (../shared/DESIGN.md, "Damage is a 
 evidence, never the end"), from the three-valued streams each fed the trace as one chunk
 (:func:`judge_three`).
 
-* **The verdict** is FRET's finite-trace verdict three-valued (:func:`fretc.monitors.
-  completions.decide`: Kleene's reading, then every completion where it is open): violated
-  when every completion of the unknown ticks violates the requirement, satisfied when every
-  one satisfies it, unknown otherwise. An invariant broken at a tick read is violated,
-  whatever a gap elsewhere held; one that held on every tick read but has unknown ticks is
-  unknown.
-* **The LTL3 verdict** runs the monitor automata over every letter an unknown tick may be
-  (:func:`fretc.monitors.three_valued.ltl3_verdict`).
-* **The evidence** of a violation is FRET's interval semantics over the ticks as sampled,
-  keeping only the failed triggers that are *definite* (:mod:`fretc.monitors.definite`);
-  where none is, the evidence is the tick from which the pt formula is false in every
-  completion.
-* **Triggers** counted are the definite ones; a requirement that holds in every completion
-  with no definite trigger is vacuous.
-
-Where the parts of a requirement are unknown is :mod:`fretc.monitors.unknowns`'s.
-"""
+Design notes: ARCHITECTURE.md, `monitors/judge3.py`."""
 
 from __future__ import annotations
 

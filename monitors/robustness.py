@@ -6,38 +6,7 @@ FRET's pt formula at the last tick is the requirement's finite-trace verdict
 space robustness (Donze, Maler, FORMATS 2010; Fainekos, Pappas, TCS 2009) instead of truth
 values, operator by operator over the same columns :mod:`fretc.monitors.vectorized` reads:
 
-=====================  ==============================================================
-``x <= c``, ``x < c``   ``c - x``  (the signed distance to the threshold, in x's unit)
-``x >= c``, ``x > c``   ``x - c``
-``x = c`` / ``x != c``  ``-|x - c|`` / ``|x - c|``
-boolean atom ``p``      ``+inf`` when ``p`` is true, ``-inf`` when false
-``true`` / ``false``    ``+inf`` / ``-inf``; ``FTP`` ``+inf`` at tick 0, else ``-inf``
-``!p``                  ``-p``
-``p & q`` / ``p | q``   ``min`` / ``max`` (``->``, ``<->``, ``xor`` by their definitions)
-``Y p`` / ``Z p``       ``p`` one tick earlier; ``-inf`` / ``+inf`` at tick 0
-``O p`` / ``H p``       running ``max`` / ``min`` (bounded: over the window, an empty window
-                        ``-inf`` for O and ``+inf`` for H)
-``a S b``               ``max over j <= i of min(b[j], min over j < k <= i of a[k])``
-``a T b``               ``min over j <= i of max(b[j], max over j < k <= i of a[k])``
-=====================  ==============================================================
-
-Sign convention (so that the sign always tells the verdict): a value ``>= 0`` means true,
-``< 0`` false, everywhere. A comparison that is false at distance 0 (``x < c`` with
-``x == c``, ``x != c`` with ``x == c``) or that involves NaN (false, or true for ``!=``) gets
-the smallest magnitude of its sign: :data:`TINY` below zero when false, ``0.0`` when true; the
-negation of a 0 is ``-TINY``. By induction every node's value is ``>= 0`` exactly where its
-truth value is true, so the requirement's robustness is negative exactly when it is violated.
-
-A boolean FRET variable has no distance: ``+-inf`` says "decided by a boolean, no margin".
-A vacuous verdict has a value ``>= 0``: the margin by which the scope or condition stayed
-away (``+inf`` when they are boolean).
-
-:class:`RobustnessStream` evaluates the formula over a trace fed a chunk of ticks at a time
-(memory independent of its length), keeping what the audit reports: the value, its tick and
-the margin at :func:`margin_ticks`' ticks (:class:`RobustnessSummary`); :func:`robustness` is
-a whole trace fed to it as one chunk. :func:`robustness_columns` evaluates many short traces
-laid end to end at once (entities judged together).
-"""
+Design notes: ARCHITECTURE.md, `monitors/robustness.py`."""
 
 from __future__ import annotations
 

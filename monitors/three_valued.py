@@ -4,39 +4,7 @@ tick may be, over a trace fed a chunk of ticks at a time (:class:`KleeneStream`,
 :class:`Ltl3SetStream`); judging a whole trace is feeding it one chunk
 (:func:`kleene_values`, :func:`ltl3_verdict`).
 
-**Kleene's values.** A tick can be unknown for some variables only (a gap holds some topics;
-a NaN is one operand). A three-valued truth is written as a float: ``+inf`` true whatever the
-unknown ticks held, ``-inf`` false in every completion, ``0.0`` (or ``-0.0``) unknown;
-thresholding at ``> 0`` gives Kleene's ``lo`` (true in every completion), at ``>= 0`` its
-``hi`` (may be true). Negation is ``-x``; ``&`` and ``|`` are ``min`` and ``max``; ``Y Z O H
-S T`` are the recurrences :class:`fretc.monitors.robustness._Rho` runs for Donze and Maler's
-robustness (each temporal operator's state carried from chunk to chunk). Thresholding is
-monotone, so it commutes with ``min`` and ``max``: each operator is exact and the whole
-formula sound, where ``lo`` is true every completion satisfies, where ``hi`` is false every
-one violates (Kleene 1952; the same three-valued reading as LTL3's, Bauer, Leucker,
-Schallhart, TOSEM 2011). A boolean if-then-else is ``max(min(c, t), min(-c, e), min(t, e))``,
-Kleene's with its ``t & e`` term. Numbers carry an unknown mask through arithmetic; a
-comparison is unknown where an operand is, and, under fretc's NaN rule (docs/guide/ticks.md,
-"NaN"), where an operand is NaN; an uninterpreted function is unknown wherever a variable is.
-
-**Gap ticks.** A *gap tick* (``stretch``: a ``gap`` row of a CSV trace, a tick a gap of a tick
-topic lost, docs/guide/ticks.md) stands for one tick or more, how many not known: its value
-is what every one of those ticks, for every count, may be. ``Y``/``Z`` and ``pre`` at a gap
-tick read its own later ticks as well as the tick before (unknown where they differ), ``FTP``
-at a first gap tick is unknown, and a bounded ``O``/``H`` counts a tick only where every
-count puts it in the window (:func:`stretched_window`); ``S``, ``T`` and the unbounded ``O``,
-``H`` do not count ticks.
-
-**The LTL3 verdict** (Bauer, Leucker, Schallhart, TOSEM 2011) runs each live automaton over
-the set of its states every letter an unknown tick may be leads to (a subset construction,
-Rabin and Scott 1959), and at a gap tick every state further ticks lead to; a tick whose
-letter is known moves a single state through the table.
-
-FRET's finite-trace verdict is the pt formula at the last tick, decided where Kleene's reading
-leaves it open by :mod:`fretc.monitors.completions`. A formula whose comparisons read a
-past-time value or ``pre``, or that calls an uninterpreted function, is read over the whole
-trace fed as one chunk (:func:`kleene_unsupported` says why it cannot be chunked).
-"""
+Design notes: ARCHITECTURE.md, `monitors/three_valued.py`."""
 
 from __future__ import annotations
 

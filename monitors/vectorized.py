@@ -6,31 +6,7 @@ at once from the columns of the sampled trace (one 1-D array per FRET variable).
 does that, operator by operator, with exactly the semantics of the generated ``step()``
 (which is the Havelund-Rosu dynamic programme; Havelund & Rosu, TACAS 2002):
 
-=====================  ==========================================================
-``Y p`` / ``Z p``       ``p`` shifted one tick; ``False`` / ``True`` at tick 0
-``O p`` / ``H p``       cumulative or / and (``np.logical_or.accumulate``)
-``O[l,h] p``            ``p`` at some tick in ``[i-h, i-l]`` (ticks >= 0): window sums
-``H[l,h] p``            ``p`` at every tick of that window (an empty window is true)
-``a S b``               the latest ``b`` is no older than the latest ``!a``
-                        (running maxima of tick indices)
-``a T b``               ``!(!a S !b)``
-``preReal(i, x)``       ``x`` shifted one tick, ``i`` at tick 0
-=====================  ==========================================================
-
-Several traces at once (``starts``: each tick's trace starts at that index, as the traces of
-the entities of a per-entity requirement laid end to end): every operator restarts at a
-trace's first tick (``Y`` false, ``Z`` true, ``O``/``H``/``S`` over that trace's ticks only),
-so each trace's values are those it has alone.
-
-Arithmetic follows the generated module's helpers: ``/`` by zero, ``mod`` by zero and
-overflowing ``^`` give NaN; ``min``/``max`` keep Python's ``min(a, b)`` / ``max(a, b)``
-choice when NaN is involved; a boolean variable read as a number is 0/1 and a number read
-as a boolean is ``bool(x)`` (NaN is true).
-
-The tests check :func:`pt_series` against the generated monitors' ``step()`` on random
-traces for all 288 FRET template keys. :func:`ltl3_status` replays the deterministic Spot
-monitors that codegen embeds (same tables, same atoms) over the same columns.
-"""
+Design notes: ARCHITECTURE.md, `monitors/vectorized.py`."""
 
 from __future__ import annotations
 

@@ -10,15 +10,7 @@ valid and the tree passes ``doorstop``'s validation as before. The keys (:data:`
 items that link to them, :mod:`fretc.reports.rollup`), ``fretc_audit_id``,
 ``fretc_audit_date``.
 
-The original bytes of every file are kept: fretc's block is appended to the item file after a
-marker comment (:data:`MARKER`); exporting again cuts the file at the marker and writes the
-new block (and drops fretc's keys Doorstop moved when it saved an item: ``doorstop``'s
-validation saves items in its own layout, keys sorted), so nothing is added twice. Every
-file written is checked to read back (PyYAML's safe loader, as doorstop reads it) as the
-item's own keys and fretc's; where appending cannot give that (a flow mapping, a ``...``
-document end), the item is written again as YAML. Files of the tree that are not judged items are copied
-unchanged.
-"""
+Design notes: ARCHITECTURE.md, `reports/export_doorstop.py`."""
 
 from __future__ import annotations
 

@@ -3,33 +3,7 @@ of sphinx-needs (its ``needimport`` directive and ``needs_external_needs`` read 
 envelope of ``sphinx_needs.needsfile``: ``project``, ``current_version``, ``versions`` ->
 version -> ``needs`` by id, ``needs_amount``, ``creator``).
 
-One need per requirement of the audit document and per item without FRETish text, in the
-document's order, of type :data:`NEED_TYPE` (sphinx-needs' default requirement type):
-
-* ``id``: the requirement's id (the ``verifies`` property of each test case of ``fretc audit
-  --junit``, so sphinx-test-reports links the cases to it); ``title``: the tool's long name
-  (ReqIF ``LONG-NAME``, Doorstop header) or the id; ``content``: the FRETish text;
-* ``status``: the requirement's result over the runs (``satisfied``, ``vacuous``,
-  ``violated``, ``unknown``, ``error``, ``not formalized``:
-  :func:`fretc.reports.export_results.requirement_results`); ``tags``: ``fretc`` and it;
-* ``links``: the parent requirements that are needs of the same file (a child links to what it
-  refines, :mod:`fretc.reports.rollup`); every parent link is in ``fretc_parents``;
-* the fields of :data:`FIELDS` (declare them in ``needs_fields``, or ``needs_extra_options``
-  before sphinx-needs 6, to see them: docs/guide/requirements-tools.md):
-  ``fretc_verdict``, ``fretc_verdicts`` (``log: verdict`` per run), ``fretc_evidence``,
-  ``fretc_rollup`` and ``fretc_rollup_path`` (parents only), ``fretc_tool``,
-  ``fretc_tool_id``, ``fretc_ft``, ``fretc_pt``, ``fretc_parents``, ``fretc_audit_id``,
-  ``fretc_audit_date``.
-
-Ids are written as JUnit's ``verifies`` writes them (:func:`fretc.common.textsafe.visible`:
-a control character, U+202E or U+2028 in an id as a visible escape), so the test cases link
-to their needs whatever the id holds; ``[[`` in any other value is written ``[ [``
-(sphinx-needs reads ``[[...]]`` in a need's fields and content as a dynamic function call
-and runs it).
-
-Deterministic: ``created`` is the audit's date (``--audit-date``, else the audit document's
-modification time), never the time of the export; keys sorted.
-"""
+Design notes: ARCHITECTURE.md, `reports/export_needs.py`."""
 
 from __future__ import annotations
 

@@ -2,24 +2,7 @@
 per requirement, for CI. Deterministic (no wall-clock times: every ``time`` is 0); every
 text and attribute made legal XML 1.0.
 
-Each ``testcase`` carries ``<properties>`` for the traceability tools that read JUnit
-(sphinx-test-reports maps a property to a sphinx-needs link with its
-``tr_property_link_types``; StrictDoc and CI dashboards show them), :data:`CASE_PROPERTIES`
-in this order, each present only when it has a value:
-
-* ``verifies``: the requirement's id (the need id of ``fretc export --needs``);
-* ``tool``, ``tool_id``: the requirements tool it came from (``reqif``, ``doorstop``,
-  ``fret``) and its identifier there (ReqIF SPEC-OBJECT ``IDENTIFIER``, Doorstop UID,
-  FRET ``reqid``), when it was read from one;
-* ``verdict``: the verdict on this log (``satisfied``, ``vacuous``, ``violated``,
-  ``unknown``, ``error``); ``vacuous``: ``true`` or ``false``; ``partial``: ``true`` when the
-  log is damaged and was judged up to the damage;
-* ``log``: the log as given to the audit;
-* ``first_violation_log_time_ns``: the log time (ns) of the message that decided the first
-  missed tick, ``first_violation_s`` that tick in seconds from the log's first tick;
-* ``robustness``: the margin behind the verdict (:mod:`fretc.monitors.robustness`; ``inf``,
-  ``-inf`` for booleans).
-"""
+Design notes: ARCHITECTURE.md, `reports/junit.py`."""
 
 from __future__ import annotations
 

@@ -3,28 +3,7 @@ a trace of the requirements' variables (booleans toggled per tick, numbers typed
 and removed) and sees, per requirement, its value at each tick, FRET's verdict of the trace
 and the first violation.
 
-The trace is judged by the audit's own judge (:func:`fretc.monitors.judge.judge`: FRET's
-interval semantics, its evidence and first violation; the pt formula over the columns where
-the interval semantics cannot decide), on columns built as the audit builds them from a CSV
-trace (a boolean column for a boolean variable, a float column for a number). The value at
-tick ``i`` is the pt formula over ticks ``0..i`` (:func:`fretc.monitors.vectorized.pt_series`:
-what the generated runtime monitor says at that tick, the verdict of the trace cut there).
-
-The page (``templates/ltlsim.html``: static HTML and JavaScript, no external asset) asks the
-server for the requirements (``GET /api/requirements``) and posts the trace as JSON
-(``POST /api/judge``, body ``{"ticks": n, "values": {variable: [value per tick]}}``). The
-server (:func:`make_server`, the standard library's ``http.server``) listens on 127.0.0.1
-only and answers only requests whose ``Host`` is that address or ``localhost`` (a page of
-another site cannot reach it through DNS rebinding), and only requests of the page's own
-origin, ``http://127.0.0.1:PORT`` or ``http://localhost:PORT``: a request whose ``Origin``
-(without one, whose ``Referer``) is another is refused (403), and a ``POST`` must carry one
-of them naming that origin (a browser's fetch and form posts send ``Origin``: a page of
-another site could otherwise post traces through the user's browser; the Fetch standard,
-"Origin header"). A malformed request (a method other than GET and POST, a ``Content-Length``
-missing or not a byte count, a body that is not UTF-8 JSON, nested past what the JSON reader
-takes, a number past a double) is answered 4xx with a JSON ``{"error"}``, never a traceback,
-and the server goes on serving.
-"""
+Design notes: ARCHITECTURE.md, `reports/ltlsim.py`."""
 
 from __future__ import annotations
 

@@ -7,21 +7,7 @@ Origin`), else ``requirements[].parent`` (a ``.fret`` ``parent:`` line); the ite
 FRETish text (``not_formalized``) take part by their ``origin.parents``. A parent named by a
 link but absent from the document is a node too (``not in the audit``).
 
-A requirement's own verdict is its result over the runs (the caller's:
-:func:`fretc.reports.export_results.requirement_results` gives it). Its *rolled-up* verdict is over
-itself and every requirement below it, the first that applies:
-
-* ``violated``: one of them is violated on some run;
-* ``unverified``: one of them has no verdict (an error, an unknown verdict, no run judged
-  it), or is a leaf with no FRETish text (``not formalized``: nothing verifies it);
-* ``satisfied``: one of them is satisfied (non-vacuously);
-* ``vacuous``: every one is vacuous.
-
-A requirement with no FRETish text of its own, or not in the audit, is verified only through
-its children. The ``path`` goes from the requirement down to the first (in the document's
-order, depth first) requirement that decides a ``violated`` or ``unverified`` roll-up, with
-that requirement's own verdict; a link that goes back up a path (a cycle) is not followed.
-"""
+Design notes: ARCHITECTURE.md, `reports/rollup.py`."""
 
 from __future__ import annotations
 

@@ -4,26 +4,7 @@ A small deterministic SVG writer (no matplotlib, no JavaScript, no external font
 verdict gives byte-identical text. Input is the audit's JSON (schema ``fretc-audit/1``, see
 :mod:`fretc.audit.verdict`): one verdict object and the log object it belongs to.
 
-The picture, top to bottom, all in log time (seconds since the log's start
-``start_time_ns``, the log time of its first message, what Foxglove shows as elapsed time;
-every event at its tick's time, as the terminal and the JSON give it):
-
-* a legend;
-* **whole log** - one bar from the first to the last tick, with the scope interval, the
-  response window, the trigger, the first violation, the LTL3 verdict time, the damage of a
-  partial log, and grey frames around the stretches drawn in detail below;
-* **detail** - one lane per FRET variable the audit sampled around the trigger and the
-  violation (``values``: boolean lanes filled where the variable is true, numeric lanes as a
-  sample-and-hold step line with the requirement's comparison thresholds dashed), and one lane
-  per bound topic with a dot at the log time of every message held at those ticks
-  (``sources``: a gap in the dots is a silent topic). The audit only carries values in
-  windows of a few ticks around the trigger and the violation, so the time axis is broken
-  between windows (the break is labelled with the time skipped); nothing is interpolated
-  across a break. Tick ``k`` is drawn as the cell from its time to the next tick's time.
-
-Every marker carries ``data-mark`` and ``data-ns`` (log time, integer ns) attributes so tests
-and tools can check the picture against the JSON.
-"""
+Design notes: ARCHITECTURE.md, `reports/timeline.py`."""
 
 from __future__ import annotations
 

@@ -2,38 +2,7 @@
 :mod:`fretc.shield.emit_gwendolen`): one per enforced requirement, stating as much of its
 timing as AJPF's property language can, and the release of each stop output.
 
-**Ticks.** The agent's ``.ail`` sets ``ajpf.transition_every_reasoning_cycle = false``, so
-AJPF's model states are the environment's choices of a tick's percepts: in each, the agent
-believes the inputs of a tick and the outputs it decided for them (``B(A, decided)`` from its
-first tick on; before it, one state where it believes nothing). AJPF's LTL (the MCAPL manual's
-property specification language: ``[]``, ``<>``, ``U``, ``R``, ``~``, ``&``, ``||``, ``->``) has
-no next operator and no bounds, so over these states:
-
-* ``immediately`` is stated exactly: at every tick of the trigger the response holds;
-* ``within N``, ``next`` and ``after N`` are stated without their count (the response comes
-  eventually; ``after N``: not at the trigger, eventually after it): AJPF cannot count ticks;
-* ``for N``: the response at the trigger's tick (how long it holds is not counted);
-* ``always`` and ``never``: exactly (the response at every tick from the trigger on, or its
-  negation).
-
-The trigger (FRET's conditions, ../shared/fretish/README.md): ``whenever C`` every tick of
-``C``; ``upon C`` (a regular condition) each tick at which ``C`` becomes true, the first tick
-included, written without a next operator as ``[] (~T -> ((T & P) R (~T || (T & P))))``
-(from each tick without ``T``, the next tick with it has ``P``; ``T = decided & C``, false in
-the state before the first tick); no condition: the first tick, ``(~D U (D & P))``. A mode
-scope, ``until``/``before`` and a condition or response that is no formula over the shield's
-atoms (a temporal function) are not stated; the file says why.
-
-**The release.** For each boolean output that the fallback sets true (a stop), the property
-``release_o: [] (([] Q) -> <> ([] ~B(A, o)))``: once every input atom stays false and the
-controller keeps proposing ``push`` (:func:`fretc.shield.emit_gwendolen.proposals`), the stop
-is eventually released for good (the shield's minimal interference; an agent that latches the
-stop violates it). It is stated only when the shield itself has it: stepped here from every
-state the environment reaches (every input valuation and proposal), the output ends false on
-every such run. AJPF checks it on the agent with an environment that proposes ``push`` only
-(its ``.ail``): half the choices a tick, a JPF run of minutes; the states only a ``stop``
-proposal reaches are those checked here on the machine, which the agent runs.
-"""
+Design notes: ARCHITECTURE.md, `shield/agent_properties.py`."""
 
 from __future__ import annotations
 

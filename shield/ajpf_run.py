@@ -2,27 +2,7 @@
 of decision-making in agent-based autonomous systems", ASE 2016) run on the agent that ``fretc
 shield --emit gwendolen`` wrote into DIR (:mod:`fretc.shield.emit_gwendolen`).
 
-What it needs, and where it looks:
-
-* **MCAPL**, from its own repository (``git clone https://github.com/mcapl/mcapl``, built by
-  its ``build.xml``: ``ant compile``): the folder holding ``bin/`` (MCAPL's classes) and
-  ``lib/3rdparty/RunJPF.jar``; ``--mcapl DIR``, else ``AJPF_HOME`` (the variable MCAPL's manual
-  asks for).
-* **A Java 11 runtime** for JPF: MCAPL's ``jpf.jar`` is JPF v8 of jpf-core's Java 11 branch,
-  which fails on a later class library; ``--java PATH``, else ``AJPF_JAVA``, else ``java`` on
-  the ``PATH``; its version is checked.
-* **javac** (JDK 11 or later) for the agent's environment (``N_env.java``, ``N_shield.java``),
-  compiled with ``--release 11`` against MCAPL's classes; ``--javac PATH``, else ``javac``.
-
-Each property of ``N.psl`` is checked in a JPF run of its own (AJPF checks one property a run):
-with ``N_LABEL.ail`` when the form wrote one (the environment changing the inputs that
-property reads, :mod:`fretc.shield.agent_properties`), else ``N.ail``. JPF's site file is
-written into a temporary folder (``mcapl = DIR``), so ``~/.jpf`` is not read. The verdict is
-read from JPF's report as MCAPL prints it: ``no errors detected`` with no search constraint
-hit holds; ``An Accepting Path has been found`` (AJPF's listener) is violated; anything else
-(an exception in the agent or its environment, a depth or memory limit, which make "no errors"
-no proof, a timeout) is an error with its reason.
-"""
+Design notes: ARCHITECTURE.md, `shield/ajpf_run.py`."""
 
 from __future__ import annotations
 

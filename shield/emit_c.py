@@ -5,24 +5,7 @@ Files ``<name>_shield.h`` and ``<name>_shield.c`` (prefix ``P`` = the name), and
 ``<name>_shield_run.c``, a program that runs the shield over a CSV of inputs and proposals
 (its comment gives the format):
 
-* ``P_shield_inputs`` / ``P_shield_outputs``: one field per FRET variable a requirement reads
-  (``bool``, or ``double`` for one compared with numbers); a declared variable no
-  requirement reads has no field (the caller passes such an output on unchanged);
-  ``P_shield_state``: per machine its belief (the monitors' state bits of each state it may
-  be in), the step's scratch and the memo;
-* ``P_shield_init(s)``; ``P_shield_step(s, inputs, proposed, corrected)``: the rule of
-  :mod:`fretc.shield.machine` (as :class:`fretc.shield.runtime.ShieldRuntime`, compared tick
-  by tick on random runs in the tests, NaN inputs included); returns 1 when the proposal was
-  changed (``s->reasons``: bit ``r`` set when ``P_SHIELD_REQUIREMENT_IDS[r]`` forced it), 0
-  when not, and -1 only when a machine no longer knows its state and the shield has no
-  fallback (no outputs: ``corrected`` untouched). ``s->fault`` says what could not be read,
-  the first that holds: 1 an input, 3 a machine that no longer knows its state, 2 a proposal,
-  4 an output bounded by the inputs given the number nearest the fallback's.
-
-How the C form computes bounds, NaN inputs (beliefs, :data:`C_BELIEF_LIMIT`,
-:data:`C_CASES_LIMIT`, :data:`C_FREE_LIMIT`), messages, comparisons of several variables and
-its memo (:data:`MEMO_SLOTS`) as the Python form does: ARCHITECTURE.md ("The shield in C").
-"""
+Design notes: ARCHITECTURE.md, `shield/emit_c.py`."""
 
 from __future__ import annotations
 

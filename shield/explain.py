@@ -2,24 +2,7 @@
 requirement, read off the closed loop (:func:`fretc.shield.prove.closed_loop`: every run of
 the shield with any environment and any controller).
 
-For a requirement with condition ``C`` (none: every tick) and response ``R``:
-
-* **wait**: the most consecutive ticks at which ``C`` holds and ``R`` does not, starting where
-  ``C`` becomes true (or at the first tick): how late the shield lets the response come
-  (``upon too_close ... within 1 second``: 10 ticks); unbounded when some run keeps ``C``
-  without ``R`` for ever. A ``whenever`` condition asks the response at every tick ``C``
-  holds, so its wait is said from each such tick (``whenever C ... immediately R``: ``R``
-  must hold at every tick at which ``C`` holds), not once after ``C`` becomes true;
-* **release**: whether ``R`` may stop holding again while ``C`` still holds (one response per
-  trigger: R2 lets the robot move on while the obstacle is still too close).
-
-They are read for requirements without a scope whose timing asks one response after the
-condition (``immediately``, ``within``; ``always`` without a condition); any other is said to
-be enforced as it reads (a scope's mode, ``for``, ``next``, ``until``, ``never`` ... are not
-this one response, and "may never come" outside a scope is no liberty).
-
-These are facts of the closed loop, so they hold for the Python, C and ROS 2 forms alike.
-"""
+Design notes: ARCHITECTURE.md, `shield/explain.py`."""
 
 from __future__ import annotations
 

@@ -1,26 +1,7 @@
 """How far back a machine's requirements look: the ticks after which a shield that lost its
 state knows it again (:mod:`fretc.shield.runtime`, "a lost state recovers").
 
-A machine's state is the bits of its requirements' pt monitors
-(:class:`fretc.check.pt_monitor.Monitor`). When every operator of a pt formula looks back a
-bounded number of ticks, the formula's value at a tick, and at every later one, depends only
-on the last ``L`` ticks' valuations: two monitors fed the same ``L`` ticks agree on it from
-then on, whatever state each started in (a monitor started afresh sees ``FTP`` at its first
-tick; ``FTP`` is read through bounded operators only, and ``L`` counts the tick it is true
-at). So a machine that lost its state, run from its initial state beside the shield on
-``L`` ticks of readable inputs and the outputs published, is in a state equivalent to the
-true one for every verdict and every move the game allows.
-
-:func:`lookback` is ``L`` (ticks), or None when some operator looks back without bound (an
-unbounded ``O``, ``H``, ``S``, ``T`` or a FRET stream below the top): such a machine needs a
-reset. Two forms are read semantically:
-
-* the formula's top ``H`` (the requirement kept at every tick: the shield keeps it, so its
-  bit is true in every state the shield reaches);
-* ``O[l,h] x -> (H !z | y)`` where ``x`` implies ``z`` (``x`` is ``z`` or a conjunction
-  holding it: FRET's ``for`` timing, ``z`` its trigger): ``H !z`` is false whenever ``O[l,h]
-  x`` holds, so it never decides the implication, which looks back as ``O[l,h] x -> y``.
-"""
+Design notes: ARCHITECTURE.md, `shield/lookback.py`."""
 
 from __future__ import annotations
 

@@ -9,32 +9,7 @@ monitors (:class:`fretc.check.pt_monitor.Monitor`: one bit per ``Y``/``O``/``H``
 sub-formula, binary counters for bounded ones). Its functions are BDDs exported from BuDDy
 into one node table (:mod:`fretc.shield.synthesis`):
 
-* ``safe``: the move keeps every requirement's pt formula true now and the monitors' next
-  state inside the safety game's winning region (:mod:`fretc.check.safety_game`), with the
-  outputs' numeric and message consistency (``ctl_ok``);
-* ``next[k]``: the next value of state bit ``k``;
-* ``keep[j]``: requirement ``j`` alone kept now and its own winning region kept, the
-  outputs' consistency left out: a proposal that fails it is *a reason* for an override;
-* ``ctl_ok``: the output atoms' consistency (a valuation numbers can take, and a message
-  the bindings can give): a proposal that fails only it is overridden with no requirement
-  as its reason;
-* ``env_ok``: the input atoms take the truth values of real numbers (the proof's
-  environment, :mod:`fretc.shield.prove`);
-* ``robust``: the output valuations ``safe`` from every state of the winning region with
-  every input ``env_ok`` allows (the fallback's, :func:`fretc.shield.fallback.fallback_of`);
-* ``assumed[a]``: assumption ``a`` of the environment has held at every tick so far (the
-  game counts a requirement kept once one has not, :mod:`fretc.shield.plan`).
-
-The rule every form implements (:class:`fretc.shield.runtime.ShieldRuntime`, the one Python
-implementation, written into ``--emit python``'s module; the C form; the tests compare them
-with a brute-force reference on random inputs): the proposal unchanged when ``safe`` holds
-for it (minimal interference), otherwise the outputs with ``safe`` that change the fewest
-output atoms, ties broken by the user's preferences, then by the node table's order.
-
-Variables of the node table: ``0 .. I-1`` the input atoms, ``I .. I+O-1`` the output atoms,
-``I+O ..`` the state bits. Node 0 is false, node 1 true; node ``k >= 2`` is
-``(variable, low, high)`` with ``low, high < k`` (children first).
-"""
+Design notes: ARCHITECTURE.md, `shield/machine.py`."""
 
 from __future__ import annotations
 

@@ -1,41 +1,7 @@
 """The message a group of outputs is: their bindings as terms over the message's fields, so
 that every form of the shield decides values one message gives (KP-124).
 
-Outputs bound to one topic are corrected together (:class:`fretc.shield.plan.MessageGroup`),
-and the game never chooses a valuation of their atoms no message gives. The *numbers* are
-the runtime's: a proposal kept, the nearest number giving corrected truths, a fallback's
-value for a proposal that could not be read. Where a boolean output and a number read one
-field (``driving_forward = /cmd_vel.linear.x > 0.01``, ``cmd_linear = /cmd_vel.linear.x``),
-or two numbers do (``linear_speed = abs(linear.x)``, ``linear_velocity = linear.x``), those
-numbers could be no message's: ``cmd_linear = 0.0`` beside ``driving_forward``. The model of
-such a group lets every form make its decision one message, as the ROS 2 node makes its
-messages (:mod:`fretc.shield.messages`), without the binding language
-(:func:`fretc.shield.runtime_values.as_message`, and its C twin):
-
-* ``slots``: the message fields the group's bindings read, ``(topic, path)``;
-* ``reads``: per variable ``(variable, kind, term)``: ``kind`` ``"b"`` (a boolean) or
-  ``"n"`` (a number), ``term`` its binding over the slots: ``("slot", i)``, ``("num", x)``,
-  ``("not", a)``, ``("and", a, b)``, ``("or", a, b)``, ``("iff", a, b)``, ``("cmp", op, a,
-  b)``, ``("neg", a)``, ``("fn", "abs", a)`` (a boolean field's slot holds 0/1; ``min``/
-  ``max`` of an array field read as its one element, as :mod:`fretc.testing.invert` writes it);
-* ``passed``: the variables of ``reads`` no requirement reads (passed through by the shield,
-  written over the decided message only where that changes none of the others);
-* ``writes``: the numbers whose term is a field, ``-x`` or ``abs(x)`` of one (written into the
-  message as :func:`fretc.shield.messages._write_number` writes them: ``abs`` keeps the sign
-  the field has);
-* ``witness``: per valuation key (the group's atoms as bits, first atom least significant)
-  the message :mod:`fretc.testing.invert` solved for it, as one value per slot (a slot it
-  did not set: 0, false);
-* ``atoms``: the group's output atoms (the machine's indices, the bits of a key), ``check``:
-  the machine's output atoms the group's values must give, and ``integers`` the variables of
-  whole numbers.
-
-A group's model is made only when every binding is such a term (no string, ``age()``,
-arithmetic, index or slice), no variable is in a cluster of comparisons of several
-variables, and the terms give each witness's valuation and numbers and the binding
-language's own values on it (:func:`fretc.signals.bindings.compile` evaluating the witness
-message); otherwise :func:`model_of` says why, and the plan notes it.
-"""
+Design notes: ARCHITECTURE.md, `shield/message_model.py`."""
 
 from __future__ import annotations
 

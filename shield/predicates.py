@@ -8,17 +8,7 @@ comparisons, z3 decides which valuations real numbers realize
 (:mod:`fretc.check.predicates`, which ``fretc check``'s realizability uses too), and the
 invariant joins the game's ``ctl_inv`` (outputs) or ``env_inv`` (inputs).
 
-An output cluster's recorded numbers are what the shield outputs for the cluster's
-variables when it changes the truth of one of its atoms (the proposal's numbers give the
-proposed truths, not the corrected ones). A comparison of one output with a term over the
-inputs (a bound, ``v <= 0.5 * (d - 0.3)``: :mod:`fretc.check.bounds`) is no cluster's: its
-feasibility is the environment's move (:mod:`fretc.shield.plan`). Refused
-(:class:`fretc.shield.plan.ShieldError`): a comparison of inputs and outputs that is no bound
-(several outputs, ``=``/``!=``, the output under a function or with a factor that reads the
-inputs: :func:`fretc.check.bounds.classify` says which), a past value of a number
-(``preReal``: the game keeps no number from one tick to the next), a function other than
-``absReal/absInt/minReal/minInt/maxReal/maxInt``.
-"""
+Design notes: ARCHITECTURE.md, `shield/predicates.py`."""
 
 from __future__ import annotations
 

@@ -4,29 +4,7 @@ and log time, read with the formats' own libraries (``mcap`` for MCAP files, ``r
 for ROS 1 bags and rosbag2 folders), and the MCAP file that holds them with the shield's
 messages added (``mcap``'s writer; MCAP's well-known profiles, mcap.dev/spec/registry).
 
-* **MCAP**: every message record with its channel (topic, message encoding, metadata) and
-  schema (name, encoding, data) as the file holds them; the ids are the writer's. The records
-  are read by fretc's own MCAP reader (:class:`fretc.logs.mcap.source.McapSource`, the
-  audit's: a damaged chunk or record is a gap, a cut ends the pass) with the messages' bytes
-  kept instead of decoded, so that the damage found is the audit's.
-* **ROS 1 bag**: each connection a channel of message encoding ``ros1`` with its
-  ``ros1msg`` schema (``pkg/Type`` and the connection's full definition) and the
-  ``md5sum``, ``callerid`` and ``latching`` metadata, as ``rosbag``'s conversion to MCAP
-  writes them; a message's log time and publish time are its bag time.
-* **rosbag2**: each connection a channel of message encoding ``cdr`` with its ``ros2msg``
-  (or ``ros2idl``) schema as the bag stores it (ROS 2 Jazzy's definition from ``rosbags``
-  when the bag stores none).
-
-A recorded topic that the shield publishes on (the robot's own Safety System's output,
-``/cmd_vel_filtered`` in a Safe-ROS recording) keeps its messages unchanged on a channel of
-the topic :func:`recorded_topic` names, so the shield's messages are the only ones of its
-topics and the audit of the shielded recording judges them alone.
-
-**Damage** (../shared/DESIGN.md, "Damage is a gap"): :class:`RecordedLog` reads as far as
-the recording can be read and says where its intact span ends (``intact_end``, exclusive,
-ns; the reader's words in ``stopped``); :func:`write_shielded` given ``gaps`` records them
-in the shielded recording (:mod:`fretc.logs.recorded_gaps`), where its audit reads them.
-"""
+Design notes: ARCHITECTURE.md, `shield/replay_records.py`."""
 
 from __future__ import annotations
 

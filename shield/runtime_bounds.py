@@ -2,35 +2,7 @@
 the shield's step (:mod:`fretc.shield.runtime`), written into the Python form after
 :mod:`fretc.shield.runtime_values` (:func:`fretc.shield.emit_python.render_python`).
 
-**A bounded output** (:mod:`fretc.check.bounds`: ``linear_velocity <= 0.5 * (front_dist -
-0.3)``) gets, once the machine has decided the truth of each of its comparisons, the number
-nearest the proposal that gives them all: each truth value is a half-line of the output, and
-the number is the proposal clamped into their intersection (Nav2's collision monitor: the most
-restrictive polygon wins). In doubles, as the audit judges the comparison: its end is the
-comparison's own *threshold*, the last finite double that makes it true going up (or the first
-going down), found from the bound's value by galloping then bisection over the doubles in
-their order (:func:`threshold`): the comparison reads the output once with a constant factor,
-so its truth is monotone in it, and the threshold is exact whatever the rounding of ``1.5 *
-v``; an infinite bound is read as the reals read it (no finite number is below ``-inf``, even
-where ``1.5 * v`` overflows). The C form computes the same thresholds (unique: the same
-numbers).
-
-Where no finite number gives the decided comparisons (a bound of ``-inf``, REP 117's "too
-close to measure", or NaN; two bounds a double apart), or an input a bound reads cannot be
-read (a NaN: the machines decide for every value it could have had, :mod:`fretc.shield.runtime`,
-and its bounds cannot be computed), the output takes the number nearest the fallback's value
-(rest, 0, without a fallback) that gives its decided comparisons that can be met (the bounds
-read, else the comparisons with constants alone), and the decision's ``fault`` says so. The proof (``--prove``) assumes the decided comparisons are given; such a
-tick is one where no number gives them, reported, never silent.
-
-**A twist** (``[shield] twists``: a linear and an angular speed) corrected by the machine is
-then scaled as one: every speed of the twist is its proposal times the one factor of the most
-restrictive correction (:func:`scaled`), so the robot keeps its path's curvature (Nav2's
-collision monitor's ``limit`` scales the linear and angular speeds together), where every
-comparison the machine decided still holds for the scaled speeds; otherwise each keeps its own
-correction. A correction that is no slowdown (a speed that changes sign, grows, or moves off
-zero) is not scaled.
-"""
+Design notes: ARCHITECTURE.md, `shield/runtime_bounds.py`."""
 
 from __future__ import annotations
 

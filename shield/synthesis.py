@@ -4,35 +4,7 @@ Runs in ``fretc check``'s query worker (:class:`fretc.check.solver.SpotWorker`, 
 ``("call", synthesize, args)``), so the game has the same BDD engine (BuDDy), work and memory
 budgets and unknown answers as ``fretc check``'s realizability (:mod:`fretc.check.safety_game`).
 
-The game is the product of the requirements' pt monitors (:mod:`fretc.check.pt_monitor`);
-``Lose`` its attractor: the states from which the environment forces a pt formula false.
-The shield's functions (:mod:`fretc.shield.machine`) are exported as one node table:
-
-* ``safe(s, i, o) = ok(s, i, o) & ctl_ok(o) & next(s, i, o) not in Lose``: every move the
-  shield lets through. From a state outside ``Lose`` every input letter allowed by
-  ``env_ok`` has a safe output (the fixed point), so the shield never blocks;
-* ``keep_j``: requirement ``j``'s pt formula alone kept now and the next state out of its
-  own attractor, whatever ``ctl_ok`` says (the reasons of an override: a proposal no
-  message gives breaks no requirement by that alone);
-* ``ctl_ok``: the output atoms' consistency (numbers, messages);
-* the next-value function of every state bit, and ``env_ok``;
-* ``robust``: the output valuations ``safe`` from every state outside ``Lose`` with every
-  input letter ``env_ok`` allows (over the output atoms only): the fallback of a tick whose
-  inputs cannot be read is one of them (:func:`fretc.shield.build.fallback_of`). With
-  assumptions of the environment the game counts a requirement kept once one has broken, so
-  ``robust`` alone could rely on them (``A5: always !a`` made ``!o`` robust for ``whenever a
-  ... immediately o``, and the shield overrode a correct controller with it once ``a``
-  came): it is then also required to keep each requirement's own pt formula (``raw``) now
-  and the next state out of that formula's own attractor, from every state outside it,
-  whatever the environment gives (each requirement alone: one no controller keeps without
-  the assumptions, Safe-ROS's R5 ``clearance > 0``, is lost from every state and adds
-  nothing, where the conjunction's attractor would have swallowed the others; no
-  valuation: no fallback, and the shield says so).
-
-Könighofer et al., "Shield synthesis", FMSD 51 (2017), section 4: a safety shield is the
-winning region of the safety game, and a minimally interfering one changes a proposal only
-when it leaves the region.
-"""
+Design notes: ARCHITECTURE.md, `shield/synthesis.py`."""
 
 from __future__ import annotations
 

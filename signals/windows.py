@@ -3,25 +3,7 @@ the value at a tick of ``mean(/battery.current, 2s)`` and the other window funct
 :data:`fretc.signals.bindings.windowing.WINDOW_FUNCS`, computed incrementally as the
 messages arrive in time order.
 
-A window at tick ``t`` holds the messages of its topic with time in ``(t - span, t]`` (a
-duration; pandas' ``rolling("2s")`` on the message series, closed on the right), or the
-last ``count`` messages at or before ``t``. Cost per message: constant (amortized) for
-``sum``, ``count``, ``mean``, ``rate`` (a running compensated sum), ``min`` and ``max``
-(monotone deques, Lemire's streaming minimum/maximum), ``variance`` (Welford's update with
-removal); ``median`` and ``percentile`` keep the window's values in an order-statistics structure
-(``sortedcontainers.SortedList``: insertion, removal and the k-th value in logarithmic
-time). Memory: every window
-holds at most the messages of one span (or ``count`` of them), never more.
-
-The rules a value follows: a NaN (unread) value in the window makes it NaN (three-valued:
-the window's value is unknown); an empty window gives 0 for ``sum``, ``count`` and
-``rate`` and NaN for the others (no value to take a mean of); ``variance`` is the sample
-variance (divisor n - 1, pandas' and numpy's ``ddof=1``: NaN for one message);
-``percentile(x, q, span)`` interpolates linearly between the closest ranks (numpy's and
-pandas' default). A window is *complete* at ``t`` once it starts at or after the topic's
-first message (``t - span >= first``), or once ``count`` messages were seen: the ticks
-before are the clock's warm-up (per requirement, :mod:`fretc.signals.clock`).
-"""
+Design notes: ARCHITECTURE.md, `signals/windows.py`."""
 
 from __future__ import annotations
 

@@ -1,25 +1,7 @@
 """Distributions of scenario parameters (``fretc estimate``): what a space file's
 ``[parameters]`` entry says about how often each value occurs in operation.
 
-Forms (TOML, in a space file's ``[parameters]`` table)::
-
-    interceptor_delay = [0.0, 2.0]                                  # uniform on the range
-    obstacle_x = {dist = "uniform", low = 0.7, high = 1.8}
-    interceptor_delay = {dist = "normal", mean = 0.3, sd = 0.4, low = 0.0, high = 2.0}
-    lidar_sigma = {dist = "choice", values = [0.01, 0.03], weights = [0.9, 0.1]}
-    dropout_start = {dist = "uniform", low = 2, high = 8, fault = 0.05}   # a fault injection
-
-``normal`` is truncated to ``[low, high]`` when they are given (a parameter that cannot be
-negative is truncated at 0 anyway); ``fault = q`` makes the parameter a fault that happens in
-a share ``q`` of the runs (otherwise the parameter is left as the scenario has it: no delay,
-no dropout). ``fretc falsify`` searches the range of each (uniform/normal: ``[low, high]``,
-a normal without bounds ``mean +- 4 sd``; choice: its least and greatest value).
-
-Sampling is by the *latent* standard normal coordinates ``z`` (one per parameter, one more
-per fault): :meth:`Distribution.value` maps them through the normal CDF onto the
-distribution (inverse-CDF sampling), so a run is a point of ``R^d`` under ``N(0, I)``, the
-space in which :mod:`fretc.sim.splitting` moves its particles.
-"""
+Design notes: ARCHITECTURE.md, `sim/distributions.py`."""
 
 from __future__ import annotations
 

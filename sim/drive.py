@@ -5,29 +5,7 @@ produce everything else, and the run is recorded as the simulator records (ROS 2
 :mod:`fretc.sim.recording`). It is the command ``FRETC_RUN_TRACE`` names for the pytest file
 ``fretc testgen --pytest`` writes, and the ``--command`` of ``fretc testrun``.
 
-Which variables a trace can drive (:func:`fretc.testing.drive_plan.classify`), by the topics their bindings read:
-
-* **driven**: every topic it reads is one the driver writes, :data:`fretc.testing.drive_plan.DRIVEN_TOPICS`
-  (``/scan``: the LiDAR). In Safe-ROS: ``too_close`` (``min(/scan.ranges) < 0.9``) and
-  ``scan_stale`` (``age(/scan) > 0.3``). Their values are turned into ``/scan`` messages by
-  the same inversion as ``fretc testgen --bindings`` (:mod:`fretc.testing.mcap_log`):
-  every beam of a scan reads the value written for the tick (0.81 m for ``too_close``,
-  0.99 m for not), and no scan at all where the topic must be silent (the SIF then hears
-  nothing, as in the ``lidar_dropout`` scenario).
-* **not drivable**: it reads the simulated world's ground truth (``/ground_truth/...``:
-  ``clearance`` follows from where the robot drives and what stands in the room) or a
-  driven topic together with the robot's own. Its trace values are not used.
-* **system**: the rest are the robot's outputs (``stopped``, ``stop_requested``,
-  ``forwarded_zero``, ``linear_speed``, ``angular_speed``); their trace values are not used.
-
-Timing: the run starts with ``lead_in`` seconds (default :data:`LEAD_IN_S`, so that the
-mission, which starts at 1 s, is under way) in which the scans carry the trace's first
-tick's values; trace tick ``k`` is the scan at ``lead_in + k * 100 ms``; after the trace's
-last tick the run goes on for ``lead_out`` seconds (default :data:`LEAD_OUT_S`) with the
-last tick's inputs held, so that the robot can answer an input of the last ticks (a run cut
-at the trace's end would violate every "eventually" whose trigger came late). The binding
-file's tick must be the LiDAR's 100 ms period.
-"""
+Design notes: ARCHITECTURE.md, `sim/drive.py`."""
 
 from __future__ import annotations
 

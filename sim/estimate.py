@@ -3,28 +3,7 @@ distributions (:mod:`fretc.sim.distributions`), simulate and audit each run, and
 probability requirement is decided by its sequential test (:mod:`fretc.sim.sequential`) or the
 budget ends.
 
-Determinism: run ``i`` (1-based) draws its latent coordinates from
-``numpy.random.default_rng([seed, i])`` (:func:`sample_point`): a function of the seed and the
-index alone, never of completion order. The simulator's own seed (sensor noise) is the
-space file's ``seed`` in every run, as for ``fretc falsify``: a run is a function of its
-parameters, which is what :mod:`fretc.sim.splitting` needs (its moves must not change the noise). Locally the runs are made one by one;
-on Ray (``ray_address``) in batches whose results are taken in index order, and the runs
-after the one where the last test decided are dropped, so both give the same runs, the
-same decisions and byte-identical JSON.
-
-Counting (:mod:`fretc.audit.fleet.statistics`): a probability requirement's trials are its
-triggers (``trial="trigger"``, the default: FRET's bound is per trigger; each run gives its
-triggers' outcomes, :mod:`fretc.audit.trials`) or its runs (``trial="run"``: one trial a
-run, satisfied or vacuous a success). Unknown outcomes (unknown runs or triggers) count
-against every decision under the ``worst-case`` policy (default) or not at all under
-``exclude``, never as successes; per trigger, a run that could not be judged (an error)
-stops its test (``worst-case``: it may hide any number of triggers). A campaign in which a
-run could not be judged is an error (exit 2), as an audit is.
-
-Kept runs: every run that violates a requirement is kept under ``out/runs/`` as MCAP and
-its audit JSON (``run-0007.mcap``, ``run-0007.audit.json``); the other runs' files are
-deleted.
-"""
+Design notes: ARCHITECTURE.md, `sim/estimate.py`."""
 
 from __future__ import annotations
 

@@ -10,16 +10,7 @@ cube mapped onto the parameters' ranges. When CMA-ES stops before the budget (co
 flat objective) it restarts from the centre with the next seed. A run *falsifies* when a target
 requirement is violated on it.
 
-Determinism: CMA-ES is seeded with ``seed`` (its ``k``-th restart with ``seed + k``; cma's
-seed 0 means "from the clock", so ``seed + 1`` is passed); the simulator always uses the
-space's own seed; so the same seed gives the same runs, one after another or on Ray. With Ray
-(``ray_address``) a population's runs are simulated and audited in parallel; the runs after
-the first falsifying one are dropped when the search stops at the first (``first``), so the
-runs are those of a run without Ray.
-
-Boolean FRET variables have robustness +-inf (no margin): a requirement decided by booleans
-alone gives CMA-ES nothing to descend, and the search over it is a seeded random search.
-"""
+Design notes: ARCHITECTURE.md, `sim/falsify.py`."""
 
 from __future__ import annotations
 

@@ -4,28 +4,7 @@ Reading uses only the file: ``mcap``'s reader, and ``rosbags`` deserializers who
 built from the schemas embedded in the log (``get_types_from_msg``), so ROS 1 and ROS 2
 recordings from any tool decode the same way.
 
-:func:`expected_verdicts` is a small, independent reference evaluator used to fill the
-expected-verdict table of ``traces/README.md`` from what the runs actually did. It is not
-fretc's monitor; its conventions are:
-
-* ticks every 100 ms from the first message's log time to the last one's (inclusive);
-* each signal is sampled-and-held: its value at tick ``T`` comes from the latest message with
-  ``log_time <= T``; before the first message a signal has the value of a zero message
-  (``false``, zero twist), except ``scan_stale`` (true) and ``clearance`` (+inf);
-* FRET finite-trace semantics, null scope: ``whenever c ... eventually r`` = every tick with
-  ``c`` is followed (at or after it) by a tick with ``r``; ``upon c`` triggers on ticks where
-  ``c`` becomes true (and at tick 0 if true there); ``within d`` = some tick in
-  ``[i, i + d/100 ms]`` (a window cut off by the end of the log counts only its ticks);
-  ``immediately`` = the same tick; ``always`` = every tick.
-
-Bindings: ``too_close`` = min valid ``/scan`` range < 0.9 (valid: finite and within
-``[range_min, range_max]``; ``-inf`` counts as ``range_min``; NaN and ``+inf`` ignored, REP 117);
-``stopped`` = ``|linear.x| < 1e-3`` and ``|angular.z| < 1e-3`` on ``/cmd_vel_filtered``;
-``stop_requested`` = ``/gwendolen_control.data``; ``forwarded_zero`` = all six components of
-``/cmd_vel_filtered`` are 0; ``linear_speed``/``angular_speed`` = their absolute values;
-``clearance`` = ``/ground_truth/clearance.data``; ``scan_stale`` = no ``/scan`` for more than
-0.3 s.
-"""
+Design notes: ARCHITECTURE.md, `sim/logs.py`."""
 
 from __future__ import annotations
 

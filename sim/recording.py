@@ -5,22 +5,7 @@ store and CDR by default, the ROS 1 Noetic store and the ROS 1 wire format with 
 Files are written with ``mcap``'s writer, following the MCAP well-known profiles
 (mcap.dev/spec/registry):
 
-========  =======  ===============  ================  ===================================
-profile   ROS      schema encoding  message encoding  schema name / data
-========  =======  ===============  ================  ===================================
-``ros2``  Humble   ``ros2msg``      ``cdr``           ``pkg/msg/Type``; full definition
-``ros1``  Noetic   ``ros1msg``      ``ros1``          ``pkg/Type``; full definition
-========  =======  ===============  ================  ===================================
-
-The schema data is the concatenated message definition with its dependencies separated by
-``=====`` lines and ``MSG: pkg/Type`` headers, as ``ros2 bag``/``rosbag`` and Foxglove expect
-(``rosbags``' ``generate_msgdef``). ROS 1 channels carry ``md5sum`` (and ``latching`` for
-``/map``) metadata like ``rosbag``'s MCAP conversion.
-
-Times: ``log_time = publish_time = header.stamp`` = sim time in ns since the Unix epoch
-(the clock starts at a fixed epoch, no wall clock enters the file), so the same inputs give
-byte-identical files.
-"""
+Design notes: ARCHITECTURE.md, `sim/recording.py`."""
 
 from __future__ import annotations
 

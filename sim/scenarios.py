@@ -1,31 +1,6 @@
 """The recorded scenarios. Each is a world (unmapped obstacles) plus fault injections.
 
-========================  ======================================================================
-``nominal``               the paper's mission in the mapped room; the SIF fires near walls
-                          (point 3 is ~0.62 m from one) and the monitored release lets the
-                          robot finish; ends home, stopped.
-``unmapped_obstacles``    a drum moved from its mapped place (4.80, -3.55) onto the route
-                          between points 1 and 2 (the SRAS plans through it); the SIF stops the
-                          robot before contact, monitored releases creep up to the release
-                          floor, then the SIF holds the stop; the SRAS makes no progress, aborts
-                          the mission and the run ends stopped. A second drum is moved off the
-                          route.
-``dynamic_obstacle``      a person (r = 0.25 m) crosses the route between points 1 and 2 at
-                          0.5 m/s; the SIF stops the robot, clears once the person has passed,
-                          and the mission completes.
-``sif_disabled``          the ``unmapped_obstacles`` world with the SIF switched off: the robot
-                          drives into the drum (ground-truth clearance reaches 0); the run ends
-                          at contact, the robot still commanding motion.
-``interceptor_fault``     the mapped room; the interceptor forwards ``/cmd_vel`` even while
-                          stop is requested, so the robot goes closer than the threshold and
-                          keeps moving.
-``stop_delay``            the mapped room; every ``/gwendolen_control`` decision is published
-                          ``stop_delay`` s late (default 2.0 s).
-``lidar_dropout``         the mapped room; no ``/scan`` for ``dropout_duration`` s (3 s) while
-                          the robot heads for the gap near point 3; the SIF has no fail-safe for
-                          stale scans and keeps its last decision (no stop).
-========================  ======================================================================
-"""
+Design notes: ARCHITECTURE.md, `sim/scenarios.py`."""
 
 from __future__ import annotations
 

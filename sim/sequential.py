@@ -10,28 +10,7 @@ effective sample size ``n* = M^2 / sum(m_i^2)`` of the runs so far (``m_i`` a ru
 the unknown outcomes against it: ``holds`` is decided with them all going against the
 bound, ``fails`` with them all going its way.
 
-:class:`SPRT` is Wald's sequential probability ratio test (A. Wald, "Sequential tests of
-statistical hypotheses", Ann. Math. Statist. 16(2), 1945), as statistical model checkers use
-it (Younes & Simmons 2002): for ``P >= p`` it tests ``H_holds: P >= p + delta`` against
-``H_fails: P <= p - delta`` (the *indifference region* ``(p - delta, p + delta)``, where
-either answer is acceptable). After the runs so far, the log-likelihood ratio is
-``llr = n* (q log(P_h / P_f) + (1 - q) log((1 - P_h) / (1 - P_f)))`` at the share ``q`` of
-satisfied trials (``P_h``/``P_f`` the two hypotheses' rates): with one trial a run, Wald's
-sum over the runs. The test says ``holds`` once ``llr >= log((1 - beta) / alpha)``,
-``fails`` once ``llr <= log(beta / (1 - alpha))``. Wald's bounds: the probability of
-``holds`` when ``P <= p - delta`` is at most about ``alpha``, of ``fails`` when
-``P >= p + delta`` at most about ``beta`` (for clustered triggers with equal run sizes each
-run is one trial of fractional outcome, whose likelihood ratio is bounded by the convex
-combination of a success's and a failure's, so the bounds hold by Ville's inequality;
-otherwise the effective counts approximate them as the interval does). ``<=``/``<`` bounds
-swap the two rates; ``=`` and ``!=`` bounds are two-sided: the SPRT decides neither.
-
-:class:`SequentialCP` is a repeated Clopper-Pearson test: at looks after 10, 15, 23, ...
-runs (x1.5 each) it computes the clustered, widened interval with error ``alpha / 2^(j+1)``
-at look ``j`` (so the errors of all looks add up to at most ``alpha``, a union bound) and
-decides as :func:`fretc.audit.fleet.intervals.decide` does (``!=`` included). Slower to decide
-than the SPRT, but with no indifference region. No finite sample confirms an ``=`` bound.
-"""
+Design notes: ARCHITECTURE.md, `sim/sequential.py`."""
 
 from __future__ import annotations
 

@@ -4,35 +4,7 @@ Clock: integer milliseconds from the start of the run, physics step 10 ms; the t
 the log is ``EPOCH_NS + t`` (1_700_000_000 s, so stamps look like real ROS time). Within one
 step the order is fixed:
 
-1. physics (the base executes the last ``/cmd_vel_filtered``), contact check;
-2. delayed ``/gwendolen_control`` decisions falling due (stop_delay);
-3. every 50 ms: ``/odom``, ``/tf`` (odom -> base_link), ``/ground_truth/pose``,
-   ``/ground_truth/clearance``;
-4. every 100 ms: ``/scan`` (unless dropped), ``/tf`` (map -> odom, AMCL-like localization);
-   the agent's SIF reads the scan and may publish ``/gwendolen_control`` (and the interceptor
-   its zero Twist), all at the scan's log time;
-5. every 100 ms, 50 ms after the scan: the SRAS (mission, ``/goal``, ``/cmd_vel``) and the
-   interceptor's ``/cmd_vel_filtered``, same log time.
-
-Randomness comes from one ``numpy.random.Generator`` per noise source, spawned from
-``SeedSequence(seed)``: same seed, same run, byte-identical MCAP.
-
-Fault injections (:mod:`fretc.sim.faults`, the scenario's ``faults``): a silent LiDAR drops
-step 4's ``/scan`` and ``/tf`` as the dropout does; the other scan faults change the published
-``/scan`` (which the SIF, the shield and the controller all read) while the LiDAR keeps
-measuring; the controller's faults change the ``linear.x`` of step 5's ``/cmd_vel``; the Safety
-System's restart takes the SIF agent (or the generated shield) down at the first step in its
-window and brings it back, in its initial state, at the first step after it (before steps 2-5
-of that step). A scenario with faults writes them into the recording's metadata (``fretc.sim.faults``:
-``scenario``, ``seed`` and ``faults``, a JSON list of :meth:`fretc.sim.faults.Fault.describe`)
-before its first message; a scenario without any writes no metadata (the shipped recordings).
-
-Run end: the mission ends home or is aborted (no progress for ``stuck_timeout`` s, or the
-mission time limit); the SRAS then publishes a final zero ``/cmd_vel`` and the run goes on for
-``final_linger`` s with the robot stopped. A contact (ground-truth clearance <= 0) is a mission
-abort like a Gazebo collision: the base is blocked where it is, nobody stops it, and the run
-ends ``contact_linger`` s later with the SRAS still commanding motion.
-"""
+Design notes: ARCHITECTURE.md, `sim/simulation.py`."""
 
 from __future__ import annotations
 

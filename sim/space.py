@@ -2,40 +2,7 @@
 scenario of :mod:`fretc.sim.scenarios`, the simulator's seed, and a range for each parameter the
 search may change.
 
-A space file (``sim/spaces/*.toml``)::
-
-    scenario = "nominal"        # the scenario the parameters change (python -m fretc.sim list)
-    seed = 1                    # the simulator's seed (sensor noise), the same for every run
-    max_time = 30.0             # optional: the mission's time limit (s): shorter runs
-
-    [parameters]                # name = [low, high], in the parameter's unit
-    interceptor_delay = [0.0, 2.0]
-    obstacle_x = [0.8, 1.7]
-    obstacle_y = [-0.9, -0.3]
-
-A parameter may instead be a distribution (``fretc estimate`` samples it; ``fretc
-falsify`` searches its range), :mod:`fretc.sim.distributions`::
-
-    interceptor_delay = {dist = "normal", mean = 0.3, sd = 0.4, low = 0.0, high = 2.0}
-    dropout_start = {dist = "uniform", low = 2.0, high = 8.0, fault = 0.05}
-
-The parameters (:data:`PARAMETERS`) and what a value does to the scenario are applied by
-:func:`apply`; a space whose base scenario lacks what a parameter changes (``obstacle_speed``
-without a moving obstacle) is refused when it is loaded.
-
-A fault of :mod:`fretc.sim.faults` is searched by its ``fault_start`` and ``fault_duration``
-(s), its kind ``fault_kind`` and, for the sector faults, ``fault_sector_low`` and
-``fault_sector_high`` (degrees, REP 103). The kind is a category: in the file a name (one
-kind for every run), a choice of names (``{dist = "choice", values = ["all_nan",
-"frozen"]}``, weights as any choice's) or a range of indices; as a value it is the kind's
-index in :data:`fretc.sim.faults.FAULT_KINDS` (``falsify.json``, ``estimate.json``), and the
-search's continuous coordinate is snapped to the nearest index the file allows
-(:meth:`Space.point`). A fault share (``fault = q``) goes on ``fault_start``::
-
-    fault_kind = {dist = "choice", values = ["all_nan", "sector_nan", "frozen"]}
-    fault_start = {dist = "uniform", low = 5.0, high = 30.0, fault = 0.1}
-    fault_duration = [0.5, 3.0]
-"""
+Design notes: ARCHITECTURE.md, `sim/space.py`."""
 
 from __future__ import annotations
 

@@ -6,30 +6,7 @@ Stochastic Analysis and Applications 25(2), 2007), in our words. A run is a poin
 ``R^d`` drawn from ``N(0, I)`` (:mod:`fretc.sim.distributions`); ``r(z)`` its robustness for one
 requirement, negative exactly when violated. To estimate ``P(r(z) < 0)``:
 
-1. draw ``n`` particles from ``N(0, I)`` and score them;
-2. the level ``L`` is the ``k``-th largest robustness; if ``L < 0`` stop. Otherwise remove
-   every particle with ``r >= L`` (``K`` of them: ``k``, or more when robustness values tie,
-   the tie rule of Bréhier, Gazeau, Goudenège, Lelièvre and Rousset, Ann. Appl. Probab.
-   2016, which keeps the estimator unbiased) and multiply the estimate by ``1 - K / n``;
-3. replace each removed particle by a copy of a survivor chosen at random, moved by ``m``
-   steps of a Markov chain that leaves ``N(0, I)`` restricted to ``{r < L}`` invariant: the
-   preconditioned Crank-Nicolson proposal ``z' = rho z + sqrt(1 - rho^2) xi`` (reversible
-   for ``N(0, I)``), accepted when ``r(z') < L``;
-4. at the end the estimate is the product times the share of particles with ``r < 0``.
-
-Every level removes at least the ``k`` least critical particles, so about
-``log(p) / log(1 - k/n)`` levels reach a probability ``p``, each costing ``K * m`` runs.
-Relative error: the idealized (perfectly mixed) variance of a product of independent
-binomial shares, ``sum_j (K_j / n) / ((1 - K_j / n) n) + (1 - pi) / (pi n)`` with ``pi`` the
-final share (for ``k = 1`` this is Cérou & Guyader's ``-log(p) / n``); the confidence
-interval is log-normal around the estimate with that relative error. Poor mixing makes
-the real error larger: the tests and ``bench/statistics/`` compare with closed forms and
-crude Monte Carlo.
-
-A requirement whose robustness is boolean (+-inf: a boolean decides it) has no levels:
-:class:`SplittingError`. Unknown or error runs count as violations (robustness -inf), never
-as satisfied.
-"""
+Design notes: ARCHITECTURE.md, `sim/splitting.py`."""
 
 from __future__ import annotations
 

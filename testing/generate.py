@@ -2,31 +2,7 @@
 requirements (:mod:`fretc.compiler.coverage`) that some finite trace meets, a trace meeting
 it, and for every test the expected verdict of every requirement of the set on it.
 
-How a trace is found: a verdict-difference obligation (the requirement ``R`` and its variant
-``V`` must get different verdicts) is asked as one finite-trace query per pair of distinct
-verdicts, ``cls(R, v1) & cls(V, v2)``, where ``cls(x, violated) = !ft_x``, ``cls(x,
-vacuous) = ft_x & !trigger_x`` and ``cls(x, satisfied) = ft_x & trigger_x``
-(:class:`fretc.check.items.CheckItem`'s ``trigger_ft``), pairs with ``R`` satisfied first;
-each query goes to ``check``'s engines (:func:`fretc.check.witness.finite_trace`: Spot up
-to 16 ticks in a bound, past it the pt monitors' fixed points or z3), so deadlines of
-hundreds of ticks are handled as ``fretc check`` handles them. A threshold obligation asks
-``ft_R & trigger_R & F(comparison)`` (then without the trigger, then the comparison alone).
-When no pair has a finite trace the obligation is *unmeetable*, with the engine's answer as
-the reason; when an engine ran out of its budget it is *unknown*.
-
-Every trace found is believed only after the audit's judge agrees: the obligation is
-evaluated again on it by :func:`fretc.monitors.coverage.exercised` (interval semantics),
-and a trace that does not meet its obligation is dropped and the obligation reported as not
-generated. The tests kept are a greedy set cover of the traces (each trace counted for the
-obligations still uncovered when it was found; the one meeting most of those not yet covered
-is kept first), each listing every obligation of the set it exercises; a kept test whose
-obligations the others all cover is dropped, and every test's ``expected`` holds the verdict of every
-requirement of the set by :func:`fretc.monitors.interval.verdict_of`, the audit's verdict.
-Variables a trace's query does not constrain are false (booleans) and 0 (numbers). The
-engines read a comparison of several variables (``yout = timeStep * (xin + ypv)``) as a
-proposition; the numbers that make it true or false at each tick as the model asks are then
-chosen by z3 (:mod:`fretc.check.atom_values`), and the judge still confirms the trace.
-"""
+Design notes: ARCHITECTURE.md, `testing/generate.py`."""
 
 from __future__ import annotations
 

@@ -3,28 +3,7 @@
 test's trace (FRET variable -> value per tick) can be written as messages of the bound topics
 (:mod:`fretc.testing.mcap_log`).
 
-What is inverted (anything else raises :class:`NotWritable`, nothing is guessed):
-
-* a field with a plain path of attribute names (``/estop.data``, ``/cmd_vel.linear.x``): the
-  value itself;
-* ``!e`` and ``-e``; ``abs(e)`` (a value >= 0 only); ``min(a)`` / ``max(a)`` of one array
-  field (a one-element array holding the value);
-* ``a & b``, ``a | b``, ``a -> b``, ``a <-> b``: each way of making the operands give the
-  value, tried in turn (an operand's fields must not be set to two values);
-* a comparison of an invertible numeric term with a constant (either side): any value on
-  the wanted side of the constant (a :class:`Range`), written as :func:`point` unless
-  another variable gives the field a value on that side (``!=``: either side, above first);
-  ``=``/``!=`` with a string constant (true only for ``!=``: another string);
-* ``age(/topic) OP c``: whether the topic is silent (no message for more than / at least
-  ``c`` seconds) or fresh at the tick; :mod:`fretc.testing.mcap_log` schedules the
-  topic's messages from it.
-
-An assignment maps a key to a value: ``(topic, path)`` of a field (a path of attribute
-names) -> bool, float, str or a list of floats (array fields); ``(topic, AGE)`` ->
-``(silent, c_ns, strict)``. :func:`alternatives` lists every assignment (up to
-:data:`MAX_ALTERNATIVES`) that makes an expression give the wanted value; :func:`solve`
-finds one assignment that makes several variables give theirs at one tick.
-"""
+Design notes: ARCHITECTURE.md, `testing/invert.py`."""
 
 from __future__ import annotations
 

@@ -3,39 +3,7 @@ the messages that make each FRET variable's binding evaluate to the trace's valu
 tick, on the binding file's tick clock, which ``fretc audit`` reads back with the same
 binding file.
 
-The rules:
-
-* Tick ``k`` of the trace is at log time ``T0 + k * period`` (``T0`` =
-  :data:`EPOCH_NS`, a multiple of every period in ms; ``period``: the binding file's
-  ``[tick] period``). Every bound topic of the trace's variables gets one message at each
-  tick (log time = publish time), so the first tick is the first evaluated one (no
-  warm-up) and the log ends at the last tick.
-* At each tick the field values come from :func:`fretc.testing.invert.solve`:
-  booleans and numbers as the trace has them, a comparison's side by a margin
-  (:func:`fretc.testing.invert.point`). A field no variable sets at a tick keeps its
-  value of the tick before (the first value it is given, before that; 0, false, ``[0.0]``
-  or ``""`` when never given).
-* ``age(/t) > c`` true at tick ``k``: no message of ``/t`` in the ``c`` seconds up to the
-  tick (those of the ticks in that window are left out; one message before the first tick
-  when the window reaches back past it, which the warm-up does not count as a tick).
-* Messages are JSON (message encoding ``json``, schema encoding ``jsonschema``: one schema
-  per topic listing the fields written, named after the binding file's ``[types]`` entry
-  of the topic when it has one), zstd-compressed chunks; the same trace and binding file
-  give the same bytes.
-* Adjusted: when the values of a tick cannot be given together (two variables reading one
-  field in conflicting ways: ``stopped`` false while ``linear_speed`` and
-  ``angular_speed`` are 0), the fewest variables are left to the messages, numbers first
-  (their values are then what the messages give); :func:`bind_tests` re-judges such a
-  test and keeps its log only if it still exercises every obligation it covered.
-* The log is believed only after the audit's sampler agrees: it is read back with the
-  binding file (:func:`fretc.signals.clock.sample`) and every variable at every tick must
-  equal the trace's value; otherwise the file is removed and the test gets the reason.
-
-A trace is not written (:func:`write_mcap` returns the reason) when the binding file ticks
-by a topic or on header stamps, when a variable has no binding or its binding is not
-inverted (:class:`fretc.testing.invert.NotWritable`), or when the values of one tick
-cannot be given together even with variables left to the messages.
-"""
+Design notes: ARCHITECTURE.md, `testing/mcap_log.py`."""
 
 from __future__ import annotations
 

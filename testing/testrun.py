@@ -4,28 +4,7 @@ each test's trace is turned into a log of the system by a command (``CMD TRACE.c
 simulator driven by the trace's inputs, a test bench), and the log is audited with the
 test set's requirements (and binding file) with coverage.
 
-The pass rule. On the system's log the requirements are judged on the system's own outputs,
-not on the trace's, so a test's ``expected`` verdicts (those of its trace) are not the
-oracle; instead a test
-
-* **fails** when some requirement is violated on the system's log;
-* is **unknown** when none is violated but some verdict is not decided (unknown, an error,
-  no log): nothing was shown;
-* is **not exercised** when no requirement is violated but the obligation the test was
-  generated for (its ``generated_for``; with ``require="all"``: any obligation of its
-  ``covers``) is not exercised on the system's log: the system did not go where the test was
-  meant to take it, so the test shows nothing about that obligation (a test generated to
-  show a violation, ``deadline-missed``, is never exercised on a correct system);
-* **passes** when no requirement is violated, every verdict is decided, and the obligation
-  it was generated for (``require="all"``: every one it covers) is exercised on the log. A
-  test that names no obligation (no ``generated_for``, ``covers`` empty) is never a pass: it
-  is "not exercised".
-
-Only ``pass`` is a pass. The other obligations a test's trace covers are reported (how many
-the system's log exercises, and which not) without deciding the outcome by default: a test
-also covers obligations by the values it gives variables the system decides (a ground-truth
-clearance of 0), which a correct system's log never shows.
-"""
+Design notes: ARCHITECTURE.md, `testing/testrun.py`."""
 
 from __future__ import annotations
 

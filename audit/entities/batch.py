@@ -4,22 +4,7 @@ requirement's pt formula and its trigger formula evaluated over all of them in o
 restarts at each trace's first tick (:func:`fretc.monitors.vectorized.pt_series` with
 ``starts``), and its LTL3 automata run over each (:func:`fretc.monitors.judge.ltl3_verdicts`).
 
-FRET's finite-trace verdict of a trace is its pt formula at its last tick; it is vacuous
-when the trigger formula (:func:`fretc.compiler.trigger.trigger_pt`: no trigger in any
-scope interval) holds there too; the LTL3 verdict is the first rejection of the automata.
-These are the verdicts the judge gives one trace at a time (the tests compare them on
-random traces). The evidence is computed as columns too, so that an entity judged at once
-carries what it carries judged alone (tested, entity by entity): its robustness and margin
-at each tick (:func:`fretc.monitors.robustness.robustness_columns`), the scope intervals
-and triggers of the interval semantics (:func:`fretc.monitors.interval_traces.
-interval_counts`; one trace at a time where a scope or condition reads a temporal
-function), the log time of the message that decided its robustness' tick; kept as one
-record per entity (:mod:`fretc.audit.entities.verdicts`). The entities found violated get
-their LTL3 verdict and robustness from here and the rest of their evidence (the interval
-semantics' first violation) one at a time from the plain judge; so do the traces this pass
-cannot take: a value NaN (unknown ticks), a trace longer than a chunk, and every trace of a
-log with damage (a cut or gaps).
-"""
+Design notes: ARCHITECTURE.md, `audit/entities/batch.py`."""
 
 from __future__ import annotations
 

@@ -1,42 +1,7 @@
 """One read of a log for every per-entity requirement and every entity
 (docs/bindings.md, "One verdict per entity"): :func:`read_entities`.
 
-Each per-entity requirement is sampled on its own clock (its own variables' topics and the
-bindings' tick: :class:`fretc.signals.clock.Clock`, the tick-by-tick clock of ``fretc
-watch``, with all its rules), its plain variables once per tick; its per-entity variables
-are compiled once with the entity's key as a value set at evaluation
-(:class:`fretc.signals.bindings.expression.EntityParam`) and evaluated at each tick for each
-entity the held messages carry. Where they are functions of the key's message and the
-entity alone (fields of the key's array read through ``{key==$entity}``), each held key
-message's rows (one per entity it carries) are evaluated by numpy, a batch of
-:data:`BATCH` held messages at once, shared by the ticks that hold the message
-(:mod:`fretc.audit.entities.rows`); the tick-by-tick evaluation stays the reference (tests
-compare them, :data:`VECTORIZED`) and the fallback for a batch the rows cannot take. An
-entity's trace is its life:
-
-* its first tick is the first tick at or after its first message (a message of the key's
-  topic that carries its key), its last the first tick at or after its last message (the
-  rule of a clock's last tick, docs/guide/ticks.md): an entity seen in one message has at
-  least one tick, at or after it;
-* an array key (``/tracks.tracks[:].id``: a message lists the entities present) reads the
-  entity in the held message: a tick whose held message does not carry it reads it absent
-  (a filter keeps no item; a function that needs the item, ``joint()``, is NaN: unknown);
-* a key of one value per message (``"PARM".Name``) makes each entity a stream of its own
-  messages (its variables read it through a filter right after the topic,
-  ``"PARM"{Name==$param}.Value``): a tick reads the entity's newest message, as a stream;
-* an array key whose kind holds each entity on its own (``hold = "entity"``) reads at each
-  tick every entity met so far in its own newest message of the key's topic (the newest
-  that carried it; ``age($car)`` its age), from its first message to the clock's last tick;
-  a per-entity variable that reads ``tf()`` reads every entity met so far at each tick too
-  (each frame's newest transform, the TF buffer's rule).
-
-Memory: per clock, its plain columns (one value per tick) and the absent value of each
-per-entity variable at each tick, plus one entry per (entity, tick it is present at) (array
-keys) or per message of the entity (one-value keys); nothing grows with entities times the
-log's length, but for entities read at every tick (held on their own, or through ``tf()``):
-one entry per (entity met, tick). Per-entity variables are functions of the held messages: windows and
-aggregations over messages (``mean(x, 2s)``, ``any_of_messages``) of an entity are refused.
-"""
+Design notes: ARCHITECTURE.md, `audit/entities/read.py`."""
 
 from __future__ import annotations
 

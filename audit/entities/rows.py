@@ -1,24 +1,7 @@
 """The per-entity variables of many (message, entity) rows at once, by numpy
 (:func:`row_values`): the vectorized path of :mod:`fretc.audit.entities.read`.
 
-A per-entity variable whose fields all read the items of an array of the key's message
-through a filter on the entity's key (``min(/tracks.tracks[:]{id==$track}.distance)``) is a
-function of that message and the entity alone. For a batch of such messages, each message's
-items are looked up by their key field (a string equals only a string: FoxQL's filter
-semantics, as :func:`fretc.signals.bindings.extract._grouper` groups them), each (message,
-entity present in it) is one row, each field's value on the row's item one row of a
-:class:`~fretc.signals.bindings.extract.Valid` array (rows x 1 item), and each binding is
-evaluated once over all rows (:meth:`fretc.signals.bindings.Binding.evaluate_columns`, the
-operations of the tick-by-tick evaluator over ticks x items).
-
-What this path does not take raises :class:`~fretc.signals.columns.Irregular` and the caller
-evaluates that batch message by message with :meth:`~fretc.signals.bindings.Binding.evaluate`
-(the reference, which gives the values and the errors): a key repeated in a message (a row
-of several items), an entity with no item in a filtered array, values that are not all
-numbers or all booleans, a field missing from an item, a message without the array.
-:func:`row_fields` says which variables the path can take at all (else the caller always
-uses the reference).
-"""
+Design notes: ARCHITECTURE.md, `audit/entities/rows.py`."""
 
 from __future__ import annotations
 

@@ -2,34 +2,7 @@
 ``fretc estimate``'s tests (:mod:`fretc.sim.sequential`): exact binomial intervals, their
 form for triggers clustered in runs, and the widening over trials of unknown outcome.
 
-* :func:`clopper_pearson`: the exact two-sided interval of a binomial proportion (Clopper &
-  Pearson 1934): its ends are beta quantiles (the binomial tail is a regularized incomplete
-  beta function), by scipy's ``beta.ppf`` / ``beta.isf``; the interval scipy's
-  ``binomtest(k, n).proportion_ci(method="exact")`` finds by root search (to 2e-12), in
-  about a hundredth of its time (tests compare the two).
-* :class:`Counts` and :func:`cluster_interval`: trials grouped in runs (the triggers of one
-  run are not independent). Run ``i`` contributes ``k_i`` successes of ``n_i`` trials and
-  ``u_i`` trials of unknown outcome; the estimate is the pooled share ``K / N``. The
-  interval is Clopper-Pearson at the *effective sample size* ``n* = M^2 / sum(m_i^2)``
-  (``m_i = n_i + u_i``, ``M = sum(m_i)``; Kish, "Survey Sampling", 1965: the design effect
-  of a cluster sample whose members are perfectly correlated) with ``k* = n* * share``, as
-  Korn & Graubard compute Clopper-Pearson intervals of clustered samples ("Confidence
-  intervals for proportions with small expected number of positive counts estimated from
-  survey data", Survey Methodology 24, 1998). Perfect correlation is the worst case: a
-  run's share of satisfied triggers then has the variance of one Bernoulli trial, the most
-  a share in [0, 1] can have, so whatever the dependence between a run's triggers the
-  interval is no narrower than it should be. With one trial per run (``m_i = 1``) it is the
-  exact interval of the runs; with equal run sizes, the exact interval of ``R`` trials with
-  ``sum(k_i / m_i)`` successes.
-* **Unknown outcomes** (unknown and error runs, unknown triggers; the ``worst-case``
-  policy): the interval spans every way they could have come out, its lower end computed
-  with all of them failures, its upper end with all of them successes (Manski's worst-case
-  bounds, "Partial Identification of Probability Distributions", 2003). So they never
-  support a bound, in either direction.
-* :func:`decide`: ``holds`` when the whole interval is on the bound's side of p, ``fails``
-  when it is on the other side, else ``undecided``; an ``=`` bound is never confirmed and a
-  ``!=`` bound never refuted by a finite sample.
-"""
+Design notes: ARCHITECTURE.md, `audit/fleet/intervals.py`."""
 
 from __future__ import annotations
 

@@ -6,19 +6,7 @@ from the ``fretc`` process would then end with no verdicts, no JSON and an exit 
 reads as "violated". So :func:`fretc.audit.fleet.ray.audit_logs_ray` starts this module as a
 child process (``python -m fretc.audit.fleet.ray_driver``) and reads its results:
 
-* the job arrives pickled on standard input: ``{"shipped": ShippedPlan, "paths": [...],
-  "address": str | None, "retries": int, "num_cpus": int | None, "kill": tuple | None,
-  "fd": int}``;
-* every finished log is written to the file descriptor ``fd`` as one pickled
-  ``("done", index, LogAudit)`` as soon as it is known; ``("unavailable", message)`` when
-  Ray cannot be started or reached; the stream ends when the process exits;
-* the process's own standard output and error (Ray's messages) go wherever the parent
-  sends them (a temporary file), never to the user's terminal or ``--json -``.
-
-A log whose result never arrives (the driver was ended by Ray, or killed) is an error entry
-in the parent (:func:`fretc.audit.fleet.ray.error_audit`); the results that did arrive keep
-their verdicts.
-"""
+Design notes: ARCHITECTURE.md, `audit/fleet/ray_driver.py`."""
 
 from __future__ import annotations
 

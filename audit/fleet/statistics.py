@@ -2,35 +2,7 @@
 for a requirement ``with probability OP p`` the estimate of the probability FRET bounds,
 its exact interval and the statistical verdict (docs/guide/statistics.md).
 
-**What one trial is** (``trial``). FRET reads ``with probability OP p`` per trigger
-(:mod:`fretc.compiler.pctl`): the unit of a probability requirement is the **trigger**
-(default): each trigger of a run whose obligation the log decides is one trial, satisfied
-or violated (:mod:`fretc.audit.trials`); triggers whose timing window the end of the log
-cut are no trials, and a run without a trigger (vacuous) gives none. ``trial="run"`` is the
-per-run reading, a stronger claim when a run has several triggers: one trial per run,
-satisfied when the run's verdict is satisfied or vacuous. A requirement without a bound is
-counted per run.
-
-**The interval** (:mod:`fretc.audit.fleet.intervals`): Clopper-Pearson (scipy), for triggers at
-the effective sample size of runs as clusters (the triggers of one run are not independent:
-perfectly correlated is the worst case); over runs, the exact interval of the runs.
-
-**Unknown outcomes** (``unknown``): ``worst-case`` (default; ``fail`` is accepted for it)
-counts unknown and error runs (per run) and unknown triggers (per trigger) as trials of
-unknown outcome, and the interval spans every way they could have come out, so they never
-support a bound in either direction. Per trigger, a run that could not be judged (an error,
-or no trigger counts) hides any number of triggers: no per-trigger bound is decided while
-there is one. ``exclude`` leaves them all out (assuming they would come out at the fleet's
-rate). Never are they successes.
-
-**The verdict** of ``OP p``: ``holds`` when the whole interval is on the bound's side of p,
-``fails`` when it is on the other side, else ``undecided``, with ``more_runs`` (further runs
-at the observed rate that would decide it) and ``why``. The triggers of a single run are
-never independent trials: one run decides no per-trigger bound.
-
-The independence assumption: the interval is only right when the runs are independent
-draws from one distribution of operating conditions (docs/guide/statistics.md).
-"""
+Design notes: ARCHITECTURE.md, `audit/fleet/statistics.py`."""
 
 from __future__ import annotations
 

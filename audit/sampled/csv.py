@@ -2,38 +2,7 @@
 (``fretc audit ... --write-csv DIR``): the input of ``fretc audit`` on CSV, of the C
 monitors' runner (``fretc --emit c``) and of any other tool.
 
-One file per log holding every requirement's own clock (../shared/DESIGN.md, "Each verdict
-stands alone"): the ticks the audit of the log judged, with the values of the requirement's
-variables there (the same sample-and-hold, time base, warm-up and gaps; written from the
-audit's own columns, :func:`fretc.audit.log.audit_keeping_passes`), so that the audit of
-the file and the C runner on it judge what the audit of the log judged. Requirements whose
-clocks agree (the same ticks, the same values of the variables they share) share one clock
-of the file.
-
-Format (:class:`fretc.logs.csv.source.CsvSource`):
-
-* a first comment line starting with :data:`~fretc.logs.csv.source.SAMPLED_MARK` (so an
-  audit with binding files reads the columns as the variables they are,
-  :func:`fretc.audit.checks.csv_bindings`), then one line
-  ``# fretc clock N: R1 R2`` per clock naming the requirements judged on it
-  (:func:`~fretc.logs.csv.source.escape_id`), one line ``# fretc not sampled: T: why`` per
-  requirement the audit of the log could not judge, and for each per-entity requirement a
-  line ``# fretc per entity: T: track`` followed by its entities, each a clock of its own
-  named by the entity's verdict (``# fretc clock 9: T[track=7]``) or a not-sampled line
-  (:mod:`fretc.audit.sampled.entities`);
-* a header: ``time`` (the tick's time in seconds, exact), with several clocks ``tick`` (the
-  row's clock N), then one column per variable in the requirements' order; one row per tick
-  of each clock, in time order; a row's cells of the variables of other clocks are empty;
-* cells: booleans ``true``/``false``, numbers as Python prints a float (``nan``, ``inf`` and
-  ``-inf`` included); ``unknown`` where a gap of the log left the variable unknown; a row of
-  ``gap`` cells for a tick standing for the ticks a gap of the tick topic lost; a last row of
-  ``cut`` cells at the time the log's damage ends the span read (only the ticks before it
-  were judged).
-
-A requirement judged without ticks (``unknown`` because the damage may have taken its
-topic) has a clock of one ``cut`` row; one whose audit is an error has no clock (an error on
-the file too, saying why).
-"""
+Design notes: ARCHITECTURE.md, `audit/sampled/csv.py`."""
 
 from __future__ import annotations
 

@@ -2,23 +2,11 @@
 trees, read into :class:`fretc.fretish.files.RequirementEntry` objects that remember where each
 requirement came from (:class:`Origin`).
 
-:func:`fretc.fretish.files.load_requirements` calls :func:`tool_source_kind` on every path it is
-given and :func:`load_tool_source` for the ones it names; FRET's own JSON export is read by
-:mod:`fretc.fretish.files` (its origin is made there, :func:`fret_origin`).
-
-Which attribute holds the FRETish sentence is the caller's choice (``text_attribute``): by
-default an attribute named ``FRETish`` (any case), else the format's requirement text
-(ReqIF ``ReqIF.Text``, Doorstop ``text``). An item without that attribute, or with it empty,
-is *not formalized*: it is returned in the second list, never an error for the file.
-
-Modules: :mod:`.safe_xml` (the byte checks before any XML parser sees a file: no DTD, no
-entity, size and zip caps), :mod:`.reqif_file` (ReqIF via the ``reqif`` library),
-:mod:`.doorstop_tree` (Doorstop via the ``doorstop`` library).
-
 May import: ``fretc.common`` and the FRETish layer's entries and parser
 (:mod:`fretc.fretish.entry`, :mod:`fretc.fretish.parser`); :mod:`fretc.fretish.files` calls
 it, never the other way.
-"""
+
+Design notes: ARCHITECTURE.md, `fretish/sources/__init__.py`."""
 
 from __future__ import annotations
 

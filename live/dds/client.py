@@ -2,33 +2,7 @@
 of the robot's DDS domain and hands them to the watch engine as the Foxglove client does
 (:mod:`fretc.live.protocol`'s events on an :class:`~fretc.live.events.EventQueue`).
 
-What it reads (ROS 2's DDS mapping: :mod:`fretc.live.ros2_names`; types:
-:mod:`fretc.live.dds.idl_types`):
-
-* the graph: DDS's built-in publication topic (``DCPSPublication``, what ``ros2 topic list
-  -t`` reads). A publication of ``rt/<topic>`` for a bound topic advertises the topic with the
-  ROS type of its DDS type name (``ros2msg`` definition from rosbags' type store and the
-  ``--msg-path`` folders) and creates a reader of that type with the QoS a ROS 2
-  subscription would use to match the offered one (:func:`~fretc.live.dds.idl_types.reader_qos`).
-  When the last publication of a bound topic is gone (its writer deleted, or its
-  participant's lease expired: DDS liveliness) the topic is unadvertised (behind the
-  messages already merged: :meth:`~fretc.live.merge.MergeBuffer.put_event`; its value is then not
-  held, :class:`~fretc.live.source.WatchSource`); every bound topic's
-  publishers gone is the end of the robot's run (:attr:`DdsClient.leaving_ends_run`, after
-  the watch's restart grace);
-* the data: each reader's samples as CDR bytes; a sample's log time is its source timestamp
-  (the writer's clock), or the last ``/clock`` received when a ``/clock`` publication exists
-  (simulated time); messages merged into log-time order (:mod:`fretc.live.merge`), released
-  at the watermark: after each poll the merge learns which writers each reader is matched
-  with (:meth:`~fretc.live.merge.MergeBuffer.sync`), each sample naming its writer (its
-  publication handle); while a latched (transient-local) topic is read, the hold alone
-  releases (a publisher of it that appears sends its stored samples, of any age);
-* faults, each a ``protocol`` event naming the topic: a DDS type other than the bindings'
-  ``[types]`` (the topic is advertised without a schema: its requirements are ``error``), a
-  type the store lacks (the same), a reader whose requested QoS cannot match the offered one.
-
-Needs ``cyclonedds`` (the ``watch`` extra).
-"""
+Design notes: ARCHITECTURE.md, `live/dds/client.py`."""
 
 from __future__ import annotations
 

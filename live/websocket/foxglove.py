@@ -2,25 +2,7 @@
 ``foxglove-sdk`` serve), run in a background thread, that hands what it receives to the
 watch engine through a queue.
 
-Protocol (github.com/foxglove/ws-protocol, ``docs/spec.md``; ``foxglove-sdk`` servers speak
-the same messages under the subprotocol ``foxglove.sdk.v1``):
-
-* the client offers the subprotocols ``foxglove.websocket.v1`` and ``foxglove.sdk.v1``; the
-  server picks one (a server that picks none is refused);
-* the server sends JSON text frames: ``serverInfo``, ``advertise`` (``channels``: ``id``,
-  ``topic``, ``encoding``, ``schemaName``, ``schema``, ``schemaEncoding``), ``unadvertise``
-  (``channelIds``), ``status``;
-* the client sends ``subscribe`` (``subscriptions``: ``id`` chosen by the client,
-  ``channelId``) and ``unsubscribe``;
-* message data arrive as binary frames: opcode ``0x01``, subscription id (uint32 LE), log
-  time (uint64 LE, ns), then the payload in the channel's encoding.
-
-A dropped connection is retried with exponential backoff (``backoff`` doubling up to
-``max_backoff`` seconds); subscriptions are made again from the new advertisements.
-
-The events it puts are those of :mod:`fretc.live.protocol`, on the client's
-:attr:`~fretc.live.websocket.session.WebSocketClient.events`.
-"""
+Design notes: ARCHITECTURE.md, `live/websocket/foxglove.py`."""
 
 from __future__ import annotations
 

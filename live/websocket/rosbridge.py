@@ -4,26 +4,7 @@ it receives to the watch engine as the Foxglove client does (:mod:`fretc.live.we
 Protocol (github.com/RobotWebTools/rosbridge_suite, ``ROSBRIDGE_PROTOCOL.md``): JSON text
 frames, each an object with ``op``:
 
-* the client sends ``call_service`` (``service``, ``args``, ``id``) to rosapi's
-  ``/rosapi/topics`` (answer ``values``: ``topics`` and ``types``, two parallel lists) and
-  ``/rosapi/topic_type`` (``args``: ``topic``; answer ``values``: ``type``); the server
-  answers ``service_response`` (``id``, ``values``, ``result``);
-* the client sends ``subscribe`` (``topic``, ``type``, ``id``); the server then sends
-  ``publish`` (``topic``, ``msg``: the message as JSON, ROS field names; ROS 1 times as
-  ``secs``/``nsecs``, ROS 2 as ``sec``/``nanosec``; ``uint8[]`` as base64).
-
-The protocol carries no message time. A message's log time is the time it was received on
-the robot's ROS clock, as ``ros2 bag record`` stamps it: the last ``/clock``
-(``rosgraph_msgs/Clock``) received when the server lists that topic (simulated time,
-``use_sim_time``), else the wall clock (``time.time_ns()``).
-
-Message types: rosapi's answer, else the ``types`` given (topic -> type, e.g. from the bindings'
-``[types]`` table or ``--topic-type``). Each message is built from its JSON with the type's
-definition from rosbags' ROS 2 type store (common ROS messages) and serialized to CDR with
-that definition's ``ros2msg`` schema, so the watch, its recording and ``fretc audit`` of the
-recording decode it as a log's message. A type the store does not know is advertised
-without a schema (its requirements are ``error``: the topic cannot be read).
-"""
+Design notes: ARCHITECTURE.md, `live/websocket/rosbridge.py`."""
 
 from __future__ import annotations
 

@@ -2,29 +2,7 @@
 sessions) that hands the bound topics' messages to the watch engine as the Foxglove client does
 (:mod:`fretc.live.protocol`'s events on an :class:`~fretc.live.events.EventQueue`).
 
-What it reads (naming rules and sources: :mod:`fretc.live.ros2_names`):
-
-* the graph: rmw_zenoh's liveliness tokens under ``@ros2_lv/<domain>/**`` (the ones alive
-  when the session opens, then each change). A publisher token (``MP``) of a bound topic
-  advertises the topic with its type (``ros2msg`` definition from rosbags' type store and the
-  ``--msg-path`` folders); when the last publisher token of a bound topic is undeclared the
-  topic is unadvertised (behind the messages already merged; its value is then not held,
-  :class:`~fretc.live.source.WatchSource`). Every bound topic's publishers gone is the end of the
-  robot's run (:attr:`ZenohClient.leaving_ends_run`, after the watch's restart grace);
-* the data: one subscriber per bound topic on ``<domain>/<topic>/*/*`` (any type, any hash),
-  so only the bound topics cross the network; messages are merged into log-time order
-  (:mod:`fretc.live.merge`). A message's log time is the source timestamp of
-  rmw_zenoh's attachment, else the Zenoh timestamp, else the time it was received; when a
-  ``/clock`` publisher exists (simulated time, ``use_sim_time``) it is the last ``/clock``
-  received, as ``ros2 bag record`` stamps messages;
-* a message whose type (from its key expression) differs from the topic's advertised type or
-  from the bindings' ``[types]``: a ``protocol`` event naming topic and types, the message
-  passed on with an empty payload (an undecodable message: a gap, never held over).
-
-The session is a Zenoh peer with multicast scouting off that connects to ``tcp/HOST:PORT``
-(a router, or a peer such as ``fretc replay --serve zenoh://...``); Zenoh retries the
-connection itself. Needs ``eclipse-zenoh`` (the ``watch`` extra).
-"""
+Design notes: ARCHITECTURE.md, `live/zenoh/client.py`."""
 
 from __future__ import annotations
 

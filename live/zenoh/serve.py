@@ -1,24 +1,7 @@
 """``fretc replay LOG --serve zenoh://HOST:PORT``: a recorded log's messages published as a
 ROS 2 node on rmw_zenoh would publish them (naming rules: :mod:`fretc.live.ros2_names`).
 
-Each CDR channel of the log becomes a Zenoh publisher on ``<domain>/<topic>/<dds type>/
-<RIHS01 hash>`` (the hash of REP 2011, computed by rosbags from the log's schema) with a
-publisher liveliness token (``MP``) under ``@ros2_lv``; each message keeps its CDR bytes and
-carries rmw_zenoh's attachment with its log time as the source timestamp, so ``fretc watch
-zenoh://...`` sees the log's messages at the log's times. At the end the tokens are undeclared
-(the node left) and the session closed. Channels of other encodings (ROS 1, JSON, protobuf)
-are not published (listed in :attr:`ZenohServer.skipped`). With ``?layout=bridge`` the
-messages go out as zenoh-bridge-ros2dds routes a DDS robot's: on the topic's key
-(``cmd_vel``), with a bridge liveliness token and no attachment (so no source timestamp: a
-watch dates them when they arrive).
-
-The session is a Zenoh router listening on ``tcp/HOST:PORT`` with multicast scouting off, as the
-robot's ``zenohd`` would be: watchers and other subscribers connect to it, and it routes between
-them (a watch's ``--publish-diagnostics`` reaches the others). The object has the interface of
-:class:`fretc.live.websocket.serve.FoxgloveServer` that
-:func:`fretc.live.websocket.serve.replay_mcap` drives (``channel``, ``log``, ``wait_subscribed``,
-``stop``), and ``unpublish`` (one publisher leaves, the others go on).
-"""
+Design notes: ARCHITECTURE.md, `live/zenoh/serve.py`."""
 
 from __future__ import annotations
 

@@ -2,24 +2,7 @@
 read with ``pymavlink``'s ``DFReader`` (ArduPilot's own log library; format: ArduPilot
 "Downloading and Analyzing Data Logs", the self-describing ``FMT`` records).
 
-Topics are the log's message types (``BAT``, ``GPS``, ``ATT``, ``MODE``, ``MSG``, ``ERR``,
-``EV``, ...), as Mission Planner and MAVExplorer name them. A type logged for several
-instances (its ``FMTU`` unit string marks an instance field with ``#``, e.g. two batteries
-in ``BAT.Inst``) has one topic per instance: instance 0 keeps the type's name and instance
-*k* > 0 is ``TYPE/k`` (``BAT/1``), as for PX4 instances (:mod:`fretc.logs.flight.ulog`). Names
-without a leading ``/`` are written quoted in bindings: ``'"BAT".Volt < 10.5'``.
-
-Every column of a type is a field, named as in the log (``TimeUS``, ``Volt``), with the
-type of its format character and the scaling pymavlink applies (``c``/``C``/``e``/``E``
-centi-units and ``L`` 1e-7 degrees as float64). Log time is ``TimeUS`` (microseconds since
-boot) in ns; types without it (``FMT``, ``FMTU``, ``MULT``, ``UNIT``: the format records) are
-not topics. Messages are delivered in log-time order with the reordering window of the other
-unindexed readers (:mod:`fretc.logs.reorder`); a message later than the window is an
-``out_of_order`` problem. Bytes between records that are no record (pymavlink skips them)
-are a ``corrupt_record`` gap; a file whose end is no whole record (a crashed recording) is
-read up to there: a ``truncated`` gap. A record dated far after the records on both sides
-of it (a bit flipped in its ``TimeUS``) is a ``corrupt_record`` problem naming it, skipped.
-"""
+Design notes: ARCHITECTURE.md, `logs/flight/dataflash.py`."""
 
 from __future__ import annotations
 

@@ -1,28 +1,7 @@
 """The data section of a sound PX4 ULog file read in one walk and numpy gathers, giving what
 pyulog's read of every topic gives (format: PX4 "ULog File Format" documentation).
 
-pyulog reads a ULog message by message in Python (an object and a buffer append per data
-message), and :mod:`fretc.logs.flight.ulog_framing` walks the same messages again to find damage:
-two Python passes over some 600,000 messages in an 11-minute flight. Here one walk finds
-where each message starts (nothing else per message); numpy then checks the framing of all
-of them at once (the rules of :func:`~fretc.logs.flight.ulog_framing.ulog_framing`: known types, no
-empty message but a sync, data messages of their format's size, the last message ending at
-the end of the file) and gathers each subscription's rows (the bytes of its data messages
-up to its format's size, as pyulog keeps them) into pyulog's own ``Data`` objects, a
-topic's when its rows are first read (each row's timestamp is gathered at once: pyulog dates
-logged text, parameter changes and dropouts by the data read before them). The
-definitions are pyulog's (``parse_header_only``); the few other messages of the data
-section (logged text, parameter changes, dropouts, information) are built by pyulog's own
-classes, with the timestamp pyulog gives them (the largest data timestamp read before them).
-
-Only a file whose reading by pyulog involves none of its recovery paths takes this way: any
-damage the framing rules find, data appended (a flag of the ``B`` message), a data message
-before its subscription or of no subscription, a subscription id given twice, a message
-type pyulog skips (``R``, unknown), or a message pyulog's classes refuse, and
-:func:`read_sound` returns None: the file is then read as before (the framing walk and
-pyulog), which reports the damage. ``tests/logs/test_ulog_fast.py`` compares both reads on
-every ULog the tests have, and on damaged copies of them.
-"""
+Design notes: ARCHITECTURE.md, `logs/flight/ulog_fast.py`."""
 
 from __future__ import annotations
 

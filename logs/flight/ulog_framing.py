@@ -2,28 +2,7 @@
 the intact runs of messages around the damage (format: PX4 "ULog File Format"
 documentation).
 
-A ULog file is a 16-byte header (``ULog`` and the bytes ``01 12 35``, a version, the start
-timestamp) and then messages, each a 3-byte header (``uint16`` payload size, ``uint8`` type:
-one of ``B F I M P Q A R D L C S O``) and its payload. Nothing in a ULog marks its end and
-pyulog stops quietly where a message runs past the end of the file, so a log cut short by a
-crash, or whose tail was zeroed, reads as a shorter clean flight unless the framing is
-checked. The rules here:
-
-* **cut**: the last message runs past the end of the file (its size says so): the log is
-  damaged from the last log time read before that message to its end;
-* **damaged span**: a message header of no known type (zeroed bytes, garbage), or a data
-  message (``D``) whose size is not its format's (a size field bit-flipped: the message
-  would swallow the messages after it, pyulog skips it quietly), is where the damage starts; reading resumes after the next *sync* message (``S``, whose payload is the
-  8 sync bytes; PX4 writes one every so often): the messages between are lost and the log is
-  damaged from the last log time before the damage to the first one after it. With no sync
-  message after the damage, the rest of the log is lost (a cut).
-
-A log time here is a data message's ``timestamp`` (its first field, microseconds) or a
-logged text message's; the damage starts at the latest log time read before it (as pyulog
-dates a dropout) and ends at the first one after it, or at its start when that is older; the times of the intact runs are what the audit judges (the
-:class:`~fretc.logs.flight.ulog.UlogSource` reads each run with pyulog on its own, with the
-definitions and subscriptions of the file before it).
-"""
+Design notes: ARCHITECTURE.md, `logs/flight/ulog_framing.py`."""
 
 from __future__ import annotations
 

@@ -7,28 +7,7 @@ one MCAP chunk): every message's offset is an element of an int64 array, each fi
 all of them with one numpy operation, and each bound field is gathered from the chunk's
 bytes into one column.
 
-Layout rules (XCDR version 1, OMG DDS-XTypes 1.3 §7.4.3 "Data representation", as ROS 2
-middlewares write it and :mod:`fretc.logs.ros.selective` reads it): a 4-byte encapsulation
-header (``00 01``: little-endian CDR); offsets count from its end; a primitive of size n is
-aligned to n; a string is a uint32 length (aligned to 4, counting its NUL terminator) and its
-bytes; a sequence is a uint32 count then its elements, aligned to the element size only when
-the count is not zero; a fixed array is its elements; after the last field at most 3 bytes
-of padding.
-
-Only messages the selective decoder's fast path reads are read here, with its values:
-:meth:`ColumnarDecoder.decode` returns None - and the caller decodes that group
-message by message with the selective decoder, which falls back to rosbags, so errors are
-rosbags' - on anything else: another encapsulation (big-endian CDR), a string that is not
-ASCII (the fast path decodes UTF-8), a length or count running past its message, a message
-of the wrong size, LaserScan ranges of different lengths within the group.
-
-Columns: a bool field as a bool array (a byte other than 0 is True, as ``struct``'s ``?``),
-other numeric fields as float64 (64-bit integers are not gathered: a float64 cannot hold
-them all), a LaserScan's ``ranges`` as a float32 messages x beams array beside its
-``range_min`` and ``range_max`` (REP 117 is applied by the reader of the columns). Fields
-bound but not gathered (text, arrays, nested messages) are read from the messages themselves
-(:class:`Segment` decodes them on demand).
-"""
+Design notes: ARCHITECTURE.md, `logs/ros/columnar.py`."""
 
 from __future__ import annotations
 

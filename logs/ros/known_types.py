@@ -10,27 +10,7 @@ ROS 2 by its type hash, REP 2011), so such a definition is damage, not a variant
 is reported and skipped as an unknown schema (:func:`layout_mismatch` is called by
 :func:`fretc.logs.decoding.schema_decoder`).
 
-A definition is accepted when its layout equals that of the same type in any ROS
-distribution rosbags knows (ROS 1 Noetic for ``ros1msg``; Dashing to the newest ROS 2 for
-``ros2msg``/``ros2idl``): the layout is the field names, kinds and primitive types in order,
-nested messages expanded, fixed array lengths kept; bounds of strings and sequences and
-constants are left out (they do not change the bytes). A type no distribution defines (a
-project's own message) is not checked.
-
-Spellings of one type read as equal (:data:`ROS2_SAME`, :data:`ROS1_SAME`; issue 91): a
-primitive the interface language names twice is one type, so a schema spelling
-``DiagnosticStatus.level`` ``uint8`` where ROS's own definition writes ``byte`` is ROS's
-layout. In ROS 2, ``.msg``'s ``char`` is IDL ``uint8`` and ``byte`` is IDL ``octet``
-(rosidl_adapter's ``MSG_TYPE_TO_IDL``, the table of the ROS 2 "About interfaces" page: byte
-is ``uint8_t`` in C++, DDS ``octet``), and an ``octet`` and a ``uint8`` are each one
-unsigned byte in XCDR, aligned to 1 (OMG DDS-XTypes 1.3, 7.4.3.5), so ``byte``, ``char``
-(rosbags reads IDL's ``octet`` as ``byte``) and ``uint8`` lay out the same bytes. In ROS 1,
-``byte`` is a deprecated alias of ``int8`` and ``char`` of ``uint8`` (the ROS wiki's msg
-page, "Built-in types"). Signedness is never waived: ``int8`` and ``uint8`` differ in ROS 2.
-
-A difference is named by its field's path from the message, nested messages, arrays and
-sequences of messages included (``status[].values[].key``).
-"""
+Design notes: ARCHITECTURE.md, `logs/ros/known_types.py`."""
 
 from __future__ import annotations
 

@@ -1,39 +1,6 @@
 """Selective decoding: decode only the message fields the signal bindings read.
 
-The audit needs a few fields of a few topics (``min(/scan.ranges)``, ``/cmd_vel.linear.x``);
-building every message object in full (rosbags' deserializers) costs more than the whole
-audit otherwise does. For each (message type, set of field paths) this module generates a
-decoder that walks the serialized bytes - skipping what is not wanted with the layout rules
-of the encoding - and returns a small object holding only the wanted fields, with the values
-rosbags would give them: scalars as the same Python ``int``/``float``/``bool``/``str``,
-primitive arrays as numpy arrays that are views of the message bytes (``np.frombuffer``,
-no copy), nested messages as nested objects. Field access (``data.twist.linear.x``) and
-``__msgtype__`` work as on a rosbags message, so :func:`fretc.signals.bindings.make_extractor`
-reads either the same way.
-
-Layout rules (as rosbags' generated CDR / ROS 1 deserializers implement them):
-
-* **CDR** (ROS 2; OMG CDR, formal/02-06-51, §15.3 as used by ROS 2 middlewares): a 4-byte
-  encapsulation header (``00 01``: little endian), then the fields in order; offsets count
-  from the end of the header. A primitive of size n is aligned to n; a string is a uint32
-  length (aligned to 4, the length includes the NUL terminator) and its bytes; a sequence is
-  a uint32 count (aligned to 4) then its elements, aligned to the element size *only when the
-  count is not zero*; a fixed array is its elements without a count; a nested message is
-  aligned as its first field. After the last field at most 3 bytes of padding may remain.
-* **ROS 1** (ROS wiki, "msg serialization"): no header, no alignment; a string is a uint32
-  length without terminator and its bytes; sequences a uint32 count; the message must end
-  exactly at the end of the bytes; ``structure_needs_at_least_one_member`` is not encoded.
-
-Fallback: a type the fast path does not cover (a wanted field inside a sequence of
-messages, a whole nested message wanted, a field the type lacks, big-endian CDR) gets the
-full decoder; and a message the fast path fails on (short or malformed bytes) is decoded in
-full, so errors and their messages are those of rosbags. Both paths give identical values
-(``tests/logs/test_selective.py`` over every shipped log and the real logs).
-
-Hook: :func:`install` (called by :func:`fretc.signals.sample`) records on the source the
-fields each topic's bindings read; the sources pass them to :func:`selective_decoder` when
-they build a topic's decoder.
-"""
+Design notes: ARCHITECTURE.md, `logs/ros/selective.py`."""
 
 from __future__ import annotations
 

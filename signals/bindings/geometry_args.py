@@ -2,27 +2,7 @@
 (:mod:`fretc.signals.bindings.geometry`): the parser expands each into the fields it reads, so
 that the decoders decode them and the type checker checks them against the log's schemas.
 
-=====================================================  ===========================================
-written                                                canonical arguments
-=====================================================  ===========================================
-``scan_points(/scan[, "frame"])``                      ``("frame", ranges, angle_min,
-                                                       angle_increment[, header.frame_id])``
-``cloud_points(/cloud[, "frame"[, low, high]])``       ``("frame", low, high, data, fields,
-                                                       point_step, row_step, width, height,
-                                                       is_bigendian[, header.frame_id])``
-``polygon(x1, y1, x2, y2, x3, y3, ...)``               ``("vertices", x1, y1, ...)``
-``polygon(/footprint)`` (a ``PolygonStamped`` topic)   ``("stamped", polygon.points[:].x,
-                                                       polygon.points[:].y, header.frame_id)``
-``polygon(/msg.polygon)`` (a ``Polygon`` field)        ``("field", ...points[:].x, ...y)``
-``points_in(P, POLY)``                                 as written
-``collision_time(P, POLY, vx, wz, dt, horizon[, n])``  as written (``dt``, ``horizon``, ``n``
-                                                       numbers)
-=====================================================  ===========================================
-
-A frame is a string (``""``: the sensor's own); the message's ``header.frame_id`` is read
-only when the points are moved into another frame (through TF). Standard library only (the
-parser loads it).
-"""
+Design notes: ARCHITECTURE.md, `signals/bindings/geometry_args.py`."""
 
 from __future__ import annotations
 

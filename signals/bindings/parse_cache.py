@@ -1,27 +1,7 @@
 """The parsed expressions of a binding file kept on disk between runs, as
 :mod:`fretc.fretish.entry_cache` keeps a ``.fret`` file's parsed requirements.
 
-Every audit parses its binding files' expressions (Lark imported, its contextual lexer's
-scanners compiled, each expression parsed and checked): about 50 ms of CPU at each start,
-the same work each time for an unchanged file. An expression's tree is a function of its text,
-the ``[path_variables]`` values and the code that parses and checks it, so
-:func:`cached_parses` keys an entry by all of it: the text of every module of
-:mod:`fretc.signals.bindings` and its grammar, of the modules they take limits, units and
-errors from, Lark's ``__init__.py`` (its version, read without importing Lark) and Python's
-version. One entry per binding file (``<cache>/binding-parses/<key>``), replaced by the next
-parse of that file, holding the SHA-256 of what it was made from, its seal and its payload
-(the trees as JSON, :mod:`fretc.common.cache_json`: reading it makes only the classes of
-:mod:`fretc.signals.bindings.expression`, runs no code). An entry made from anything else,
-damaged or planted, is a miss: the expressions are parsed again (:mod:`fretc.common.cache`:
-the cache changes speed, never output).
-
-Not kept: a file with an expression that does not parse (its error is made again, with its
-place, at each read). A file whose ``[path_variables]`` hold an entity's key
-(:class:`fretc.signals.bindings.expression.EntityParam`) is kept with each key written by
-its name (``{"p": name}``): its trees must share that object with the audit,
-which sets each entity's value on it, so a tree read back holds the key object of the
-``path_variables`` it is read for, never a copy. ``FRETC_CACHE_DIR=""`` turns it off.
-"""
+Design notes: ARCHITECTURE.md, `signals/bindings/parse_cache.py`."""
 
 from __future__ import annotations
 

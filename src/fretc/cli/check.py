@@ -1,25 +1,7 @@
 """``fretc check``: find conflicting, vacuous, redundant and unrealizable requirements before
 any robot runs (the analyses are in :mod:`fretc.check.analysis`).
 
-::
-
-    fretc check FILE... [--inputs a,b] [--outputs c,d] [-b BINDINGS] [--json] [--witness-dir DIR]
-                [--budget UNITS] [--memory-budget NODES] [--mus-budget CHECKS]
-                [--timeout SECONDS] [--engine auto|spot|smt|bdd] [--no-redundancy]
-
-Realizability is checked when inputs or outputs are given, by the flags or by the
-``@inputs``/``@outputs`` directives of the ``.fret`` files (flags win), or by a FRET export's
-Input and Output variables. As in FRET, every variable of a component must be one or the
-other: a component reading a variable declared neither is not decided, and the variable is
-named with the requirements reading it (an input error, exit 2; the other checks and
-components are reported as ever). The budgets are
-counted in work the engines do (:mod:`fretc.check.budget`), so the same input gives the same
-report on any machine; ``--timeout`` is a wall-clock limit of the whole run that stops it
-with no report. Exit status: 0 no finding (redundancy is a warning), 1 a conflict, vacuity,
-unrealizability or an unknown answer (a query past its budget), 2 input errors (a
-requirement that did not formalize, a variable of realizability declared neither input nor
-output), 3 the run stopped by ``--timeout``.
-"""
+Design notes: ARCHITECTURE.md, `fretc/cli/check.py`."""
 
 from __future__ import annotations
 

@@ -5,32 +5,7 @@ sides) a finite trace meeting it, found by ``fretc check``'s engines and confirm
 audit's judge (:mod:`fretc.testing.generate`); traces meeting several obligations are merged by
 a greedy cover.
 
-Written into DIR: ``T01.csv``, ``T02.csv``... (the audit's CSV traces: one column per FRET
-variable, one row per tick; ``fretc audit -r FILE DIR/T01.csv`` judges one) and
-``tests.json``::
-
-    {"requirements": [files],
-     "tests": [{"id": "T01", "trace": "T01.csv", "ticks": 12,
-                "generated_for": {"requirement": "R2", "obligation": "deadline-missed"},
-                "covers": [{"requirement": "R2", "obligation": "trigger", "tick": 3}, ...],
-                "expected": {"R1": "satisfied", "R2": "violated", ...}}],
-     "obligations": [{"requirement", "obligation", "kind", "description"}],
-     "unmeetable": [{... , "reason"}], "unknown": [{..., "reason"}]}
-
-``expected`` holds the audit's verdict of every requirement of the set on the test's trace,
-so each test is an oracle for the whole set.
-
-With ``--bindings FILE`` each test is also written as ``T01.mcap``..., the messages on the
-topics FILE binds that make every variable's binding give the trace's value at every tick
-(:mod:`fretc.testing.mcap_log`); each test in ``tests.json`` gains ``"log"`` (the MCAP
-file name or null), ``"log_not_written"`` (why not, or null) and ``"adjusted"`` (variables
-the bindings could not give the trace's values at some tick: the trace, its ``covers`` and
-``expected`` are then those of the log), and the document ``"bindings"``.
-
-Exit codes: 0 every obligation has a test or is unmeetable, 3 some obligation is unknown
-(an engine's budget ran out; listed), 1 ``--bindings`` was given and no test could be
-written as MCAP, 2 an input error.
-"""
+Design notes: ARCHITECTURE.md, `fretc/cli/testgen.py`."""
 
 from __future__ import annotations
 

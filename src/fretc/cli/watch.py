@@ -1,28 +1,7 @@
 """``fretc watch URL`` and ``fretc replay LOG.mcap --serve``: the audit's monitors on a
 running robot over the Foxglove WebSocket protocol or rosbridge, and a server to watch.
 
-::
-
-    fretc watch ws://localhost:8765 --requirements requirements/ [--bindings B.toml]
-                [--duration S] [--until-idle DURATION] [--restart-grace DURATION]
-                [--allow-partial]
-                [--record OUT.mcap] [--jsonl] [--json OUT.json] [--no-live]
-    fretc watch rosbridge://localhost:9090 [--topic-type /scan=sensor_msgs/msg/LaserScan] ...
-    fretc replay traces/nominal.mcap --serve [--rate 10] [--host 127.0.0.1] [--port 8765]
-
-The watch ends with the run: the server's orderly close, ``--duration``, ``--until-idle`` or
-Ctrl-C; the final verdicts are then decided as ``fretc audit`` decides them at the end of a
-log. A bound topic unadvertised and advertised again within ``--restart-grace`` (a node
-restart) continues the same run, the messages in between a gap; every bound topic
-unadvertised for longer ends the run cut short (exit 3; under ``--until-idle``, the run's
-end). The exit status is the audit's
-(:data:`fretc.audit.verdict.EXIT_CODES`): 0 every verdict satisfied or vacuous on a complete
-run, 1 a requirement violated, 2 usage or input errors (a requirement that could not be
-watched, no connection), 3 no violation but the run was incomplete (a connection gap, data
-problems; 0 with ``--allow-partial``).
-Needs the ``watch`` extra: ``pip install 'fretc[watch]'`` (without it: one line saying so,
-exit 2).
-"""
+Design notes: ARCHITECTURE.md, `fretc/cli/watch.py`."""
 
 from __future__ import annotations
 
