@@ -4,17 +4,7 @@ as requirement entries, read with the ``doorstop`` library (``doorstop.build``).
 One entry per active, normative item, documents in the tree's order (parents first), items
 by level:
 
-* id: the item's UID (``R1``, ``SRD-004``);
-* text: the custom attribute named ``text_attribute`` (compared without case); by default
-  ``FRETish``, or the item's ``text`` when no item of the tree has a ``FRETish`` attribute
-  (Doorstop docs, "Item" reference: custom attributes are any other key of the item file);
-* origin: the UID, ``header`` (its long name), ``level``, the item's fingerprint
-  (``Item.stamp()``, the value Doorstop stores in ``reviewed``) as its version, its
-  ``links`` as parents, a ``rationale`` attribute, the document prefix.
-
-A link to a UID that is in no document, or links that go round in a cycle, are errors naming
-the item file: the traceability they break is what the audit reports on.
-"""
+Design notes: ARCHITECTURE.md, `fretish/sources/doorstop_tree.py`."""
 
 from __future__ import annotations
 
@@ -26,7 +16,7 @@ from typing import Any  # doorstop's objects: the library has no types
 from fretc.common.errors import FretishFileError
 
 from fretc.fretish.entry import DEFAULT_TEXT_ATTRIBUTE, Origin, RequirementEntry
-from fretc.fretish.sources import keep_entry
+from fretc.fretish.sources.entries import keep_entry
 
 __all__ = ["load_doorstop", "build_tree", "custom_attributes", "check_tree_files",
            "MAX_YAML_BYTES", "MAX_YAML_NODES"]

@@ -2,18 +2,7 @@
 entries, parsed by the ``reqif`` library (the one StrictDoc uses) once :mod:`.safe_xml`
 passed the bytes.
 
-One entry per SPEC-OBJECT (ReqIF 1.2 section 10.8.20) in document order:
-
-* id: the value of its ``ReqIF.ForeignID``, ``UID`` or ``ID`` attribute (the id people use:
-  StrictDoc writes its UID there, DOORS its absolute number), else its ``IDENTIFIER``;
-* text: the attribute named ``text_attribute`` (an attribute's name is its definition's
-  LONG-NAME, else the definition's IDENTIFIER; compared without case); by default
-  ``FRETish``, or ``ReqIF.Text`` when no type of the file defines ``FRETish``. XHTML values
-  (section 10.8.38) are read as their text; an enumeration's as its values' LONG-NAMEs;
-* origin: the IDENTIFIER, LONG-NAME (else ``ReqIF.Name``), LAST-CHANGE, the SPEC-RELATIONs
-  with it as SOURCE (section 10.8.23; their targets are its parents), the ``rationale``
-  attribute (any attribute whose name holds "rationale"), the SPECIFICATION holding it.
-"""
+Design notes: ARCHITECTURE.md, `fretish/sources/reqif_file.py`."""
 
 from __future__ import annotations
 
@@ -24,7 +13,7 @@ from typing import Any  # the reqif library's objects: it has no types
 from fretc.common.errors import FretishFileError
 
 from fretc.fretish.entry import DEFAULT_TEXT_ATTRIBUTE, Origin, RequirementEntry
-from fretc.fretish.sources import keep_entry
+from fretc.fretish.sources.entries import keep_entry
 from fretc.fretish.sources.safe_xml import MAX_BYTES, checked_text, read_reqif_members
 
 __all__ = ["load_reqif", "parse_reqif_bundles", "attribute_names", "ID_ATTRIBUTES"]
