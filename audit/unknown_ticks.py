@@ -4,20 +4,7 @@ unknown (:mod:`fretc.audit.gaps`) and ticks at which a comparison reads NaN
 (:mod:`fretc.monitors.judge3`; ../shared/DESIGN.md, "Damage is a gap: never evidence, never
 the end").
 
-* A violation in the ticks read is **violated** (exit 1); a verdict an unknown tick could
-  change is **unknown**, naming the gaps (and NaN ticks) that make it so; one that every way
-  of filling them agrees on is satisfied or vacuous.
-* A cut at the end of the log (nothing read after it) is judged as before
-  (:mod:`fretc.audit.damage`): only a definite LTL3 verdict decides, now over every letter an
-  unknown tick may be.
-* A gap tick (a CSV trace's ``gap`` row; on a clock that ticks on a topic's messages, the
-  tick a gap of that topic lost) stands for one tick or more, how many not known: the
-  verdict is the one every count and every filling agrees on
-  (:mod:`fretc.monitors.three_valued`, "Gap ticks").
-* The three-valued judge needs the requirement's pt formula over columns. Requirements
-  without it (a future-time function, FRET leaves those unexpanded in pt) are judged as on
-  a cut log instead: up to their first unknown tick (:func:`fretc.audit.finalize.prepare`).
-"""
+Design notes: ARCHITECTURE.md, `audit/unknown_ticks.py`."""
 
 from __future__ import annotations
 

@@ -9,14 +9,7 @@ NASA/TM-20220007610). An Output of one component read as an Input of another is,
 second, an input like any other: each component is judged alone, so a project with such a
 variable is no conflict (fretc refused it before there was a per-component run).
 
-``fretc check`` on requirement files whose requirements name several components and whose
-FRET export declares variables runs one check per component (:func:`component_row` reads
-each result) and ends with the table (:func:`table_text`): per component its requirements
-and ``realizable``, ``UNREALIZABLE`` with its conflicts (FRET's minimal unrealizable
-subsets), ``unknown`` with the reason, or ``not checked`` with the reason. Inside a
-component fretc splits the requirements further into **groups** (requirements that share
-variables, decided one by one): fretc's word for those, never "component".
-"""
+Design notes: ARCHITECTURE.md, `check/fret_components.py`."""
 
 from __future__ import annotations
 

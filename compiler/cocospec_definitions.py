@@ -1,21 +1,7 @@
 """The Internal variables' definitions of a CoCoSpec contract (``var NAME: TYPE = DEF;``), as
 fretc re-prints them.
 
-FRET's CoCoSpec export writes an Internal variable's ``assignment`` into the contract as it
-is. An assignment is text from a glossary a user did not necessarily write: a ``;`` in it ends
-the ghost and the rest is read as contract items (``a; tel`` then a foreign ``node`` and a
-second ``contract``), a ``--`` comments out its own ``;``, a ``(*`` swallows the rest of the
-file, and a variable named as a Lustre keyword (``node``) is renamed in the signature but not
-inside the assignment. fretc writes a definition only as it reads it: parsed in FRET's Lustre
-subset (:mod:`fretc.fretish.lustre`, the reading of ``fretc check`` and the monitors) and
-printed back from that reading (:func:`fretc.fretish.lustre.print_definition`), every variable
-through the contract's own renaming; a literal (``3.0``, ``-2``) likewise. A definition nested
-through ``pre`` past one expression's depth (FRET's tables of values over time, LMCPS's NN) is
-one ghost per ``pre`` group (:func:`fretc.fretish.lustre.pre_groups`), Lustre's meaning
-unchanged. A definition outside the subset, nested too deeply, or calling a function that is
-no node of the contract's library (a FRET Function such as ``sqrt``) is left out with the
-reason; the variable is then read as an input of the contract.
-"""
+Design notes: ARCHITECTURE.md, `compiler/cocospec_definitions.py`."""
 
 from __future__ import annotations
 

@@ -8,15 +8,7 @@ text, so the check can reuse the code objects of the previous run, as Python reu
 ``.pyc``: only ``compile()`` is memoized; the names check, the load and the two steps of
 every monitor still run on every check.
 
-One entry per module name (``<cache>/monitor-code/<key>``), replaced by the next check of a
-module of that name, so the cache holds one module's code per name and does not grow with
-each edit of a requirement file. The key names the interpreter (``importlib``'s magic
-number: code objects are not portable between Python versions) and the module name; the
-entry holds the SHA-256 of the module text it was compiled from and of its payload
-(``marshal`` of the module's code object and the tuple of its shapes' code objects). An
-entry for another text, damaged, or of another layout is a miss: the module is compiled
-again (:mod:`fretc.common.cache`: the cache changes speed, never output).
-"""
+Design notes: ARCHITECTURE.md, `compiler/code_cache.py`."""
 
 from __future__ import annotations
 

@@ -1,20 +1,6 @@
 """LTL3 monitors by formula progression, for formulas whose bounds are too large for Spot.
 
-Spot determinizes bounded operators by unrolling ``F[0,n]`` into n nested ``X``, which grows
-exponentially with n (see :data:`fretc.compiler.automata.MAX_LTL3_BOUND`). Formula progression
-(Bacchus & Kabanza, "Planning for temporally extended goals", AMAI 1998; used for LTL3 by
-Bauer, Leucker & Schallhart, TOSEM 2011, section 4) keeps bounds symbolic instead: reading one
-letter turns a formula into its *residual*, the formula the rest of the word must satisfy
-(``F[0,k] q`` becomes ``q | F[0,k-1] q``). Residuals are normalized (conjunctions and
-disjunctions flattened, sorted and deduplicated; ``F[0,a] x & F[0,b] x`` is ``F[0,min] x``;
-the dual rules for ``|`` and ``G``), so for FRET's formulas their number stays small, and the
-reachable residuals over all letters form a deterministic automaton built ahead of time.
-
-A residual that normalizes to FALSE means no continuation satisfies the formula (violated);
-TRUE means every continuation does (satisfied). The verdicts are therefore sound, never
-contradicted; they can come later than the exact LTL3 verdict when a residual is unsatisfiable
-(or valid) without normalizing to FALSE (TRUE).
-"""
+Design notes: ARCHITECTURE.md, `compiler/ltl3.py`."""
 
 from __future__ import annotations
 

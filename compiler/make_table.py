@@ -2,19 +2,7 @@
 
     python -m fretc.compiler.make_table [--out DIR]
 
-writes one JSON file per template key (default: ``compiler/table/``, checked in), as FRET
-generates its ``semantics.json`` from its templates. Each key's three formulas are built
-with placeholder atoms through the very construction of a requirement
-(:func:`fretc.compiler.semantics.construct`) and printed with each placeholder as a field
-``{i}``; the pairs of formulas the simplifying constructors compared and found different
-while building (:class:`fretc.compiler.ir.recording_comparisons`) are reduced to the conditions
-on the atoms under which they would be equal (:func:`unify`), which
-:mod:`fretc.compiler.fallback` checks per requirement. The duration of a key of class ``n >= 2``
-is a symbolic bound (:class:`SymbolicBound`): ``within``/``for``/``after`` use bounds from
-``n - 1`` to ``n + 1``, which for every ``n >= 2`` compare alike with each other and with
-0, so one template serves them all. The files are deterministic (keys sorted, the
-conditions in the order the construction compared).
-"""
+Design notes: ARCHITECTURE.md, `compiler/make_table.py`."""
 
 from __future__ import annotations
 

@@ -3,19 +3,7 @@ mutation score of ``bench/bench_mutation.py``): the classic specification mutati
 (Black, Okun, Yesha, "Mutation operators for specifications", ASE 2000; Fraser, Wotawa,
 "Using model-checkers for mutation-based test-case generation", 2007) on FRET's fields:
 
-* ``timing n-1`` / ``timing n+1``: a ``within/for/after`` duration one tick shorter or longer;
-* ``negate A``: an atom of the scope's mode, the condition, the stop condition or the
-  response negated (each field apart);
-* ``A -> B``: an atom replaced by another atom of the same requirement;
-* ``& -> |`` / ``| -> &``: one conjunction or disjunction swapped (each occurrence);
-* ``scope K``: the scope's kind changed to another kind over the same mode;
-* ``timing K``: the timing changed to another kind (durations keep their ``n``, or 1 tick);
-* ``condition whenever`` / ``condition upon``: the condition's kind changed (``upon``/``when``/
-  ``if``, a trigger at each rising edge, against ``whenever``, at every tick it holds).
-
-A mutant that is the requirement itself (the same fields) is not produced; equivalent ones
-(other fields, same verdict on every trace) are for the caller to remove.
-"""
+Design notes: ARCHITECTURE.md, `compiler/mutants.py`."""
 
 from __future__ import annotations
 

@@ -2,21 +2,7 @@
 the requirements, docs/bindings.md): where it is bound, its expression, its type and its
 unit.
 
-* **Type**: ``boolean`` or ``number``, by the binding's type check against the message types
-  the file's ``[types]`` table names (:func:`fretc.signals.bindings.typecheck.check_types`
-  with ROS 2's definitions of those types, rosbags' typestore); for a topic of unknown type,
-  from the expression itself (a comparison, ``&``, ``!``, ``any``, ``all`` give a boolean;
-  arithmetic and ``abs``, ``min``, ``count``, ``age``, ... a number); ``unknown`` when it
-  depends on a field of a topic whose type the file does not name.
-* **Unit**: REP 103's units of the standard message fields (:data:`FIELD_UNITS`: a Twist's
-  ``linear`` in m/s and ``angular`` in rad/s, a LaserScan's ``ranges`` in m, ...), of
-  ``age()`` (s), ``tf().x`` (m) and ``.yaw`` (rad), carried through ``abs``, ``min``,
-  ``max``, ``mean``, ``norm``, ``-`` and sums of one unit; ``count`` and ``len`` count;
-  None when not known. Bindings carry no units of their own (docs/bindings.md, "Units").
-
-A file that does not parse gives its variables' places by a scan of its ``[variables]`` lines
-(type ``unknown``) and its error in :attr:`BindingsFile.error`.
-"""
+Design notes: ARCHITECTURE.md, `editor/bindings_info.py`."""
 
 from __future__ import annotations
 

@@ -3,17 +3,7 @@ protocol (:mod:`fretc.editor.server` speaks LSP): its diagnostics, the requireme
 the hover text of a requirement or a variable, the completions at a position, where each
 variable is written and where it is bound.
 
-Positions here are 0-based lines and UTF-16-agnostic character columns as LSP counts them
-for ASCII text (FRETish sentences are ASCII; other text is counted in code points).
-
-An analysis reads the document's structure again on each edit but parses and compiles only
-the sentences it has not seen (:mod:`fretc.editor.sentences`: a sentence is kept with
-positions relative to its first line, so an edit above it costs nothing); pass the same
-:class:`Memory` to each :func:`analyse` of a session. Bounds: a document over
-:data:`MAX_DOCUMENT` characters is not analysed (one diagnostic says so); at most
-:data:`MAX_PROBLEMS` diagnostics; a hover of at most :data:`MAX_HOVER` characters, with a
-diagram only for a requirement whose diagram is at most :data:`MAX_DIAGRAM_TICKS` ticks wide.
-"""
+Design notes: ARCHITECTURE.md, `editor/document.py`."""
 
 from __future__ import annotations
 

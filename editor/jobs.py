@@ -10,11 +10,7 @@ killed server leaves no job behind, and it runs Spot, BuDDy and z3 in its own pr
 query worker of its own: :class:`fretc.check.solver.SpotWorker` with ``fork=False``, BuDDy's node
 table capped as the worker caps it), its address space capped at :data:`MEMORY_BYTES`.
 
-Requests: ``{"kind": "check", "text", "path", "work"}`` -> ``{"problems": [[line, col, end,
-severity, message], ...]}``; ``{"kind": "distinguish", "a", "b", "period"}`` (texts, the tick
-period in seconds as a string or null) -> ``{"text": the answer as fretc distinguish prints it,
-"equivalent": true/false/null}``; an error -> ``{"error": message}``.
-"""
+Design notes: ARCHITECTURE.md, `editor/jobs.py`."""
 
 from __future__ import annotations
 

@@ -3,18 +3,7 @@
 can make the server allocate without limit, wait on a body that will never come in a form it
 cannot leave, or end.
 
-* a header line longer than :data:`MAX_HEADER` bytes is read in pieces and dropped;
-* a ``Content-Length`` that is not a number of at most 20 digits, or over
-  :data:`MAX_MESSAGE` bytes, makes the message malformed: it is logged and the reader looks
-  for the next ``Content-Length`` header line (a JSON body holds no raw line break followed
-  by that text: JSON escapes line breaks inside strings), so the next well-formed message
-  is served;
-* a body that is not JSON, or a message the protocol cannot take, is logged and skipped; a
-  request among them (its parameters of the wrong types) is answered with an error, so the
-  client never waits for an answer that will not come.
-
-Everything else is pygls's own loop (``pygls.io_.run_async``), with this reader.
-"""
+Design notes: ARCHITECTURE.md, `editor/transport.py`."""
 
 from __future__ import annotations
 

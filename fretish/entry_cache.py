@@ -1,20 +1,7 @@
 """The requirement entries of a ``.fret`` file kept on disk between runs, as Python keeps a
 module's bytecode in ``__pycache__``.
 
-Every command reads its requirement files first; parsing them (Lark's LALR tables loaded,
-the contextual lexer's scanners compiled, each sentence parsed and checked) costs about
-0.15 s of CPU at each start of ``fretc audit`` on three requirements, most of it the same
-work each time. An unchanged file read by unchanged code gives the same entries, so
-:func:`cached_entries` keeps them: one entry a file name (``<cache>/fret-entries/<key>``,
-replaced by the next read of that name, so the cache does not grow with each edit), holding
-the SHA-256 of what the entries were made from (the file's text and name, the text of every
-module that reads or parses it, Lark's and Python's versions), its seal and its payload (the
-entries as JSON, :mod:`fretc.common.cache_json`: reading it makes only the classes of
-:mod:`fretc.fretish.ast` and :mod:`fretc.fretish.entry`, runs no code). An entry for another
-text or other code, damaged, planted or of another layout is a miss: the file is parsed
-again (:mod:`fretc.common.cache`: the cache changes speed, never output). A file with a sentence that does not parse is never kept (its errors are
-made again, with their carets, at each read). ``FRETC_CACHE_DIR=""`` turns it off.
-"""
+Design notes: ARCHITECTURE.md, `fretish/entry_cache.py`."""
 
 from __future__ import annotations
 

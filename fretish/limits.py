@@ -7,16 +7,7 @@ the 197 NASA case-study requirements that parse (``shared/corpora/fret_casestudi
 reach an expression depth of 17 (calls counted as below), 227 expression nodes, numbers of 7
 characters and durations of 200 ticks.
 
-* :data:`MAX_EXPR_DEPTH`: operators, negations and function calls nested inside one another
-  in one expression (``a & b & c`` is 2 deep: ``&`` is left-associative; parentheses alone
-  add nothing; a function call counts :data:`CALL_DEPTH` levels). The tool chain recurses
-  once or twice per level; CPython's default recursion limit is 1000.
-* :data:`MAX_EXPR_NODES`: names, numbers, operators and calls in one requirement.
-* :data:`MAX_NUMBER_CHARS`: characters of a number literal (CPython will not convert an
-  integer of more than 4300 digits to or from text by default).
-* :data:`MAX_DURATION_TICKS`: a duration or a function's tick bound after conversion to
-  ticks (monitors keep a history of up to this many bits).
-"""
+Design notes: ARCHITECTURE.md, `fretish/limits.py`."""
 
 from __future__ import annotations
 

@@ -1,22 +1,6 @@
 """Spans in which a bound topic of a watched run had no publisher (:class:`Absences`).
 
-A topic's publisher leaves (foxglove_bridge's unadvertisement, a DDS writer deleted or its
-participant's lease expired, a Zenoh liveliness token gone) while the run goes on with the
-others: from the last message used before it left until the topic's own next message, its
-values are unknown, never held over (../shared/DESIGN.md, "Damage is never evidence"), and
-a requirement that reads them is not stepped inside the span. But with no publisher nothing
-was sent: the span is a *silence*, not a loss, and the time since the topic's last message
-is known (``age(/topic)`` grows, a staleness requirement is judged: a LiDAR that dies). A
-span still open when the run ends (the publisher left for good) is a silence on every
-transport; one that closed (the publisher came back: a restart) is a silence where the
-client hears a new publisher from its first message (DDS, Zenoh:
-:data:`fretc.logs.recorded_gaps.PUBLISHER_ABSENT`), and a gap that may have lost messages
-where it subscribes again after the new advertisement (the Foxglove WebSocket protocol,
-rosbridge: ``publisher_left``). The spans are the run's gaps (:func:`run_gaps`,
-:func:`recorded_gaps`), judged as the audit of the recording judges them
-(:func:`fretc.audit.passes.mark_gaps`); only a loss makes the run partial. The requirements
-that do not read the topic are not affected.
-"""
+Design notes: ARCHITECTURE.md, `live/absence.py`."""
 
 from __future__ import annotations
 

@@ -3,19 +3,7 @@
 ``diagnostic_aggregator``, ``rqt_robot_monitor`` and Foxglove), over the transport watched
 (DDS or Zenoh), once a second and on every change of a verdict.
 
-One ``DiagnosticStatus`` per requirement: ``name`` ``fretc: <id>``, ``hardware_id``
-``fretc``, ``message`` the verdict, ``level``:
-
-* ``OK`` (0) satisfied, vacuous, or pending (no obligation missed yet on the ticks so far);
-* ``ERROR`` (2) violated, or a requirement that could not be watched (``error``);
-* ``STALE`` (3) unknown (nothing evaluated yet, or the run did not decide it).
-
-``values`` (key, value): ``verdict``; ``first_violation_s`` (the tick time of the first
-violation, s from the first tick; empty when none); ``robustness`` (at the end of the run: the
-final verdict's margin; empty while watching); ``text`` (the requirement's sentence). The
-header's stamp is the log time of the newest message watched (the robot's clock), else the
-wall clock.
-"""
+Design notes: ARCHITECTURE.md, `live/diagnostics.py`."""
 
 from __future__ import annotations
 

@@ -5,16 +5,7 @@ named by the instance (``T[track=7]``). Their verdicts are still those of the au
 end (:mod:`fretc.live.entities`); the live events follow the same rules, so an entity's
 ``ltl3`` violation is at its verdict's first violation.
 
-An entity found on a message of the key's topic gets its clock from the start of the run:
-the messages the watch used on the topics its requirement reads are kept in memory (at most
-:data:`MAX_LIVE_MESSAGES`) and replayed into the new clock, and its monitor is stepped from
-the first tick at or after that message (the entity's life, :mod:`fretc.audit.entities.read`),
-so its ticks are those the audit of the run gives it. Past the bound, entities found later have no live events (their final
-verdict is unchanged); so do entities under the header time base (the audit orders by
-header stamps: a later message may come before a tick already stepped), entities held on
-their own (``hold = "entity"``: a clock of one entity would hold the key topic's newest
-message, another entity's), and requirements without a generated monitor (``offline``).
-"""
+Design notes: ARCHITECTURE.md, `live/entity_events.py`."""
 
 from __future__ import annotations
 

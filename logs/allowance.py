@@ -8,16 +8,9 @@ file): each message of such a topic is read at its time minus the allowance (log
 ``header.stamp`` under the header time base), so that an answer that arrived within the
 allowance after its tick is judged at that tick.
 
-:func:`with_allowance` wraps an open :class:`~fretc.logs.base.LogSource`; without an
-allowance the source is returned as it is (the audit then reads exactly what it read
-before). The wrapper (:class:`AllowanceSource`) loses and reorders no message of a topic:
-its messages come in non-decreasing time again (merged with a look-ahead of the largest
-allowance, so memory holds that span's messages), and the gaps of a shifted topic shift
-with it (a gap of any topic covers both readings: its start moves back by the largest
-allowance). The problems listed keep the recorder's times.
-
 May import: :mod:`fretc.logs.base`, :mod:`fretc.common`.
-"""
+
+Design notes: ARCHITECTURE.md, `logs/allowance.py`."""
 
 from __future__ import annotations
 

@@ -1,23 +1,7 @@
 """The fields the signal bindings read, picked from a decoded self-describing message
 (``json``, ``protobuf``: :mod:`fretc.logs.mcap.encodings`) instead of converting all of it.
 
-The audit reads a few fields of a few topics (``min(/scan.ranges)``,
-``/odom.twist.twist.linear.x``). The libraries decode the whole payload (``json.loads``,
-protobuf's parser) as the plain read does; what costs beside them is turning every field
-into a message object and checking every field's type. With the bindings' field paths
-(:func:`fretc.logs.ros.selective.wanted_fields`) the decoders here build the object of only the
-fields read, and check the types of only those: a JSON value against its schema's ``type``
-(arrays of scalars in one pass), a protobuf field against its declared wire type. A field
-nobody reads is neither converted nor checked, as :mod:`fretc.logs.ros.selective` skips it in
-CDR. The values of the fields read are those of the full conversion
-(``tests/logs/test_field_select.py`` compares both, on the test logs and on generated
-messages).
-
-A path is kept up to its first index or slice (``/scan.ranges[0]`` reads ``ranges``
-whole); :data:`~fretc.logs.ros.selective.HEADER_STAMP` reads ``header.stamp``; beside a
-``ranges`` field, ``range_min`` and ``range_max`` are kept (REP 117 filtering of LaserScan).
-A path that names no field (the whole message) gives the full conversion.
-"""
+Design notes: ARCHITECTURE.md, `logs/field_select.py`."""
 
 from __future__ import annotations
 

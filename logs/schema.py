@@ -5,16 +5,7 @@ arithmetic, a boolean used as a number and the reverse, a field the message type
 declare - each an error naming the variable, the topic and the field) and by
 ``fretc inspect`` (the field paths a binding can name).
 
-Types come from the schemas embedded in the log (MCAP Schema records, the ROS 1 bag
-connection headers, rosbag2 metadata), parsed by rosbags exactly as the reader does
-(:func:`fretc.logs.decoding.build_typestore`). A field path resolves only through the fields
-a schema declares, so a binding can never walk Python attributes of the decoded objects
-(``/scan.__class__`` or ``/scan.ranges.size`` are errors).
-
-A :class:`FieldType` is one of the kinds ``bool``, ``number``, ``string``, ``message``
-(a nested type, ``name`` is its type), ``array`` (``item`` the item type, ``length`` the
-fixed length or None for a sequence) - the kinds the binding language distinguishes.
-"""
+Design notes: ARCHITECTURE.md, `logs/schema.py`."""
 
 from __future__ import annotations
 

@@ -3,21 +3,7 @@
 ``fretc simulate FILE TRACE`` (FRET's LTLSIM, after FRET's manual, "Simulating
 requirements"): for each requirement and each tick ``i`` of a trace of ``n`` ticks,
 
-* ``ft[i]``: the ft formula on the suffix of the trace from ``i`` (FRET's finite-trace
-  semantics: the suffix followed by FRET's absorbing state, ``LAST`` at its last tick), so
-  ``ft[0]`` is the requirement's verdict on the whole trace;
-* ``pt[i]``: the pt formula at ``i`` on the prefix up to ``i``, so ``pt[n-1]`` is the verdict
-  again, and ``pt`` is what a runtime monitor says at each tick;
-* ``parts``: the values of the requirement's parts at ``i``: its scope mode, its condition
-  (the trigger), its stop condition and its response (None where a value is NaN).
-
-A NaN value is unknown, as in the audit (docs/guide/ticks.md, "NaN"): ``ft`` and ``pt`` are
-None at the ticks whose value depends on it (three-valued, :func:`_three_valued`).
-
-Both formulas are evaluated by the reference evaluator (:mod:`fretc.compiler.evaluate`), the
-oracle the monitors are tested against. A trace is a CSV (the audit's format,
-:class:`fretc.logs.CsvSource`) or a timeline text (:func:`parse_timeline`).
-"""
+Design notes: ARCHITECTURE.md, `monitors/simulate.py`."""
 
 from __future__ import annotations
 

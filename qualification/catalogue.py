@@ -4,18 +4,7 @@ documentation pages made from them (docs/qualification/requirements.md and
 known-problems.md are these renderings: ``python -m fretc.qualification.catalogue DOCS``
 writes them, and a test fails when a page differs).
 
-A requirement (DO-330's tool operational requirement; IEC 61508-3 7.4.4.5's specification of
-the tool's behaviour): ``id`` (``TOR-XXX-000``, stable across versions: never reused or
-renumbered), ``area``, ``statement`` (one guarantee), ``source`` (where its rule comes
-from: FRET's documentation, a paper, REP 117, a standard, or fretc's own documentation where
-fretc defines it), ``use`` (``T2``: an analysis whose fault can hide a defect; ``T3``: code
-that runs on the robot) and, where no test of the project shows it, ``not_verified`` (why).
-
-A known problem: ``id`` (``KP-000``), ``title``, ``severity`` (one of :data:`SEVERITIES`),
-``affected`` (versions), ``detection`` (how a user finds it in their own outputs),
-``workaround``, ``test`` (the pytest node id that reproduces it) and ``fixed_in`` (a
-version or commit, or ``open``).
-"""
+Design notes: ARCHITECTURE.md, `qualification/catalogue.py`."""
 
 from __future__ import annotations
 

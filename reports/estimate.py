@@ -1,19 +1,7 @@
 """The report of ``fretc estimate`` (:mod:`fretc.sim.estimate`, :mod:`fretc.sim.rare`), in the output
 folder:
 
-* ``estimate.json`` - the campaign (:meth:`fretc.sim.estimate.Estimate.to_json`, or the ``rare``
-  section of :meth:`fretc.sim.rare.RareResult.to_json`) with ``exit_code``; no wall-clock time,
-  so the same seed gives byte-identical files, locally and on Ray;
-* ``estimate.md`` - per requirement: runs of each verdict, what one trial is (a trigger or
-  a run) and the triggers per run, the estimate of the probability of a satisfied trial,
-  its Clopper-Pearson interval, the bound and decision with the runs used, the runs that
-  could not be judged, the example failures (kept runs); with ``--rare`` the splitting estimate, relative error, interval,
-  levels and runs;
-* ``<id>.svg`` - the sequential test's path (SPRT: log-likelihood ratio against runs with
-  its two thresholds; repeated Clopper-Pearson: the interval at each look and p).
-
-Exit codes: :func:`exit_code_of`.
-"""
+Design notes: ARCHITECTURE.md, `reports/estimate.py`."""
 
 from __future__ import annotations
 

@@ -4,20 +4,7 @@ added, written again by the library; every original element is kept as it was.
 Added (ReqIF 1.2 section 10.8: a DATATYPE-DEFINITION-STRING, ATTRIBUTE-DEFINITION-STRINGs on
 a SPEC-OBJECT-TYPE, ATTRIBUTE-VALUE-STRINGs in a SPEC-OBJECT's VALUES):
 
-* one datatype ``FRETC-STRING`` (LONG-NAME ``fretc text``);
-* on every SPEC-OBJECT-TYPE with a requirement of the audit, the attribute definitions
-  :data:`ATTRIBUTES` (LONG-NAMEs ``fretc verdict``, ``fretc evidence``, ``fretc formula
-  ft``, ``fretc formula pt``, ``fretc rolled-up verdict``, ``fretc rolled-up path``, ``fretc
-  audit id``, ``fretc audit date``; the two rolled-up values only on parent requirements,
-  :mod:`fretc.reports.rollup`), IDENTIFIERs
-  ``FRETC-<key>-<type identifier>`` (unique in the file, as section 10.8.20 asks);
-* on each SPEC-OBJECT the audit judged or listed as not formalized (matched by its
-  IDENTIFIER, the audit's ``origin.tool_id``), their values.
-
-Exporting again into an exported file replaces fretc's values and adds nothing twice.
-``.reqifz`` archives are written again with their members in the same order (the
-``.reqif`` ones updated, the others copied), a fixed member time (1980-01-01), deflated.
-"""
+Design notes: ARCHITECTURE.md, `reports/export_reqif.py`."""
 
 from __future__ import annotations
 

@@ -3,20 +3,7 @@ an audit document (``fretc audit --json``), and the atomic writes every exporter
 
 A requirement's result over all the runs of the audit (:func:`requirement_results`):
 
-* ``verdict``: ``error`` if any run could not judge it, else ``violated`` if any run
-  violates it, else ``unknown`` if any is undecided, else ``satisfied`` if any run
-  satisfies it, else ``vacuous``; ``not formalized`` for the items without FRETish text;
-* ``evidence``: one line: the counts per verdict over the runs and, for each violating
-  run, where it first failed (tick, seconds, reason);
-* ``ft``, ``pt``: FRET's formulas (SMV syntax) as the audit compiled them;
-* ``rollup``, ``rollup_path``: for a requirement that others refine (a parent), its verdict
-  rolled up over them and the path to the requirement that decides it
-  (:mod:`fretc.reports.rollup`); None for the others;
-* ``audit_id``: ``sha256:`` and the first 16 hex digits of the audit document's bytes (the
-  same document, the same id); ``audit_date``: given by the caller (``--audit-date``), else
-  the document file's modification time (UTC): never the time of the export, so the same
-  inputs export the same bytes.
-"""
+Design notes: ARCHITECTURE.md, `reports/export_results.py`."""
 
 from __future__ import annotations
 

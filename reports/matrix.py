@@ -4,19 +4,7 @@ robustness, one row per requirement and run (one row for a requirement no run ju
 that was not formalized), as CSV (:func:`matrix_csv`) and as an HTML page (:func:`matrix_html`,
 ``matrix.html`` of ``fretc report``).
 
-``parents`` lists a requirement's parent links (``;``-separated); a requirement that others
-refine has its verdict rolled up over them in ``rolled_up`` (:mod:`fretc.reports.rollup`:
-``violated via SR-0 > R1 (R1 violated)``; empty for the others), and a parent the links
-name that is not in the audit gets a row of its own (verdict ``not in the audit``).
-
-A row's ``stale`` says ``stale evidence`` when the requirement as it is now (``current``,
-re-read from its source) differs from the one audited: another version (ReqIF
-LAST-CHANGE, Doorstop fingerprint, FRET ``_rev``) or another text; ``removed`` when it is no
-longer in the sources; empty when it is the same, or when the sources were not re-read.
-
-The HTML page needs no script: it holds the table once per sort order (requirement, tool id,
-verdict, robustness, stale), and the header links show one of them (CSS ``:target``).
-"""
+Design notes: ARCHITECTURE.md, `reports/matrix.py`."""
 
 from __future__ import annotations
 

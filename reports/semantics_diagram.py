@@ -5,17 +5,7 @@ timeline with the scope's interval(s) (``in M`` shades every interval where ``M`
 the response (``Res``) must, or must not, hold; a duration ``n`` is drawn as a bracket of
 ``n`` ticks from the trigger.
 
-The picture is laid out from the parsed requirement alone (its scope, condition and timing
-kinds, its duration in ticks) by FRET's rules as ``../shared/fretish/README.md`` states
-them (sections 2 to 4: scope intervals, trigger points, each timing's obligation from a
-trigger ``t`` to its interval's end ``e``), not by the audit's code: the tests hold each
-drawn window against the audit's obligation checker (:mod:`fretc.monitors.obligations`).
-Unlike ``fretc explain``'s trace diagram (:mod:`fretc.reports.explanation`, an example
-trace judged tick by tick) this one is schematic: one scope interval per kind (two for
-``in``, ``notin`` and ``onlyIn``, to show that every interval is one), the condition
-rising two ticks into it, the stop condition six ticks later; windows drawn from the first
-trigger of each interval. Same requirement, same bytes.
-"""
+Design notes: ARCHITECTURE.md, `reports/semantics_diagram.py`."""
 
 from __future__ import annotations
 

@@ -3,18 +3,7 @@ shield decides, its AJPF verification environment and the properties AJPF checks
 (Safe-ROS, Benjumea, Farrell, Dennis, FMAS 2025, Listings 2, 4 and 5: the SIF as a Gwendolen
 agent, its environment and its AJPF properties; here generated from the requirements).
 
-Files (``N`` the shield's name made an identifier): ``N.gwen`` the agent (each tick it
-decides with the shield's machine through the action ``shield/4``, believes the outputs and
-the state, and publishes the outputs), ``N_shield.java`` the machines (the correction of
-:class:`fretc.shield.runtime.ShieldRuntime`, an unreadable input any value, as the Python and
-C forms), ``N_env.java`` the verification environment, ``N.ail`` and ``N_LABEL.ail`` the AIL
-configurations, ``N.psl`` one AJPF property per enforced requirement
-(:mod:`fretc.shield.agent_properties`). What each file holds in full: ARCHITECTURE.md ("The
-Gwendolen agent").
-
-``fretc ajpf DIR`` compiles the Java files against MCAPL and runs AJPF on every property
-(:mod:`fretc.shield.ajpf_run`).
-"""
+Design notes: ARCHITECTURE.md, `shield/emit_gwendolen.py`."""
 
 from __future__ import annotations
 

@@ -2,21 +2,7 @@
 (:mod:`fretc.shield.runtime`, "an input that cannot be read"): its decision, and how it
 knows its state again.
 
-While lost, a machine gives the fallback's outputs (none without a fallback). When its
-requirements look back a bounded number of ticks ``L`` (its table's ``"lookback"``,
-:func:`fretc.shield.lookback.lookback`), a copy of it runs from the initial state beside it
-on every tick whose inputs it reads, with the fallback's outputs it gave; after ``L + 1``
-such ticks in a row the copy's state is equivalent to the true one for every verdict and
-every move the game allows (the formulas' values depend on those ticks alone), and the
-machine takes it (``Decision.recovered``). A tick with an input it cannot read starts the
-count again; a copy whose move the game does not allow (not yet in the winning region)
-starts again from the initial state. Without such a bound (an unbounded ``since`` or
-``once``, a mode scope), or without a fallback, only the runtime's ``reset`` does; the
-machine's fault says which.
-
-Written into the generated Python module with :mod:`fretc.shield.runtime` (the functions
-take the runtime's machine, ``m``).
-"""
+Design notes: ARCHITECTURE.md, `shield/runtime_lost.py`."""
 
 from __future__ import annotations
 

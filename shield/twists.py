@@ -1,19 +1,6 @@
 """Twists: outputs the shield scales together, so that a corrected robot keeps its path.
 
-A differential-drive base turns along an arc of curvature ``angular / linear``; a shield that
-clamps the linear speed and keeps the angular one (``x=0.349 z=-0.434 -> x=0.250 z=-0.434``)
-makes it turn tighter inside a speed limit's zone. Nav2's collision monitor's ``limit`` scales
-both by one factor. The binding file names the outputs of one twist::
-
-    [shield]
-    twists = [["linear_velocity", "angular_velocity"]]
-
-and the shield, where a correction of one of them is a slowdown towards 0 and the comparisons
-it decided still hold, gives each its proposal times the factor of the most restrictive
-correction (:func:`fretc.shield.runtime_bounds.scaled`); the outputs of one twist are
-corrected together (one machine: :mod:`fretc.shield.plan`). An output of a twist that no
-requirement reads (the angular speed, unbounded) is scaled with it.
-"""
+Design notes: ARCHITECTURE.md, `shield/twists.py`."""
 
 from __future__ import annotations
 

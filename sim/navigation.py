@@ -1,19 +1,6 @@
 """The Safety-Related Autonomous System (SRAS): a move_base-like navigation stack.
 
-* :class:`GlobalPlanner` — a navfn-style navigation function: Dijkstra from the goal over the
-  8-connected grid of the **static** map (``/map``), with obstacles inflated by
-  ``inflation_radius`` (0.30 m, Safe-ROS ``costmap_common_params.yaml``) and a soft cost that
-  decays away from obstacles, so paths keep to open space where they can. There is no obstacle
-  layer: objects absent from the map are invisible to the planner (unmapped obstacles
-  are exactly what the Safety System protects against).
-* :class:`LocalController` — a pure-pursuit tracker in the role of DWA: it publishes
-  ``/cmd_vel`` at 10 Hz within |v| <= 0.5 m/s, |w| <= 0.5 rad/s and a dynamic window of
-  0.5 m/s^2, 0.5 rad/s^2 around the odometry twist, and slows to ``slow_speed`` when the
-  nearest LiDAR return is closer than ``slow_range`` (a speed-limit zone; it is what lets the
-  Safety System's monitored release, see :mod:`fretc.sim.safety`, be slow).
-* :class:`Mission` — the inspection route (Safe-ROS ``simple_navigation_goals``): goals
-  (0.0, 0.0), (2.30, -1.11), (2.61, 2.42), then home.
-"""
+Design notes: ARCHITECTURE.md, `sim/navigation.py`."""
 
 from __future__ import annotations
 

@@ -4,19 +4,7 @@ the verdict of every requirement of the test's ``expected`` (those the tests wer
 for: a file's other requirements, left out by ``--only``, ``--exclude`` or ``--component``,
 are not compared) with it.
 
-The log is the test's CSV trace itself (the tests as an oracle of the requirements: a changed
-requirement shows; every verdict must be the expected one), or, when the environment
-variable ``FRETC_RUN_TRACE`` names a command, the log that command writes (named
-``FRETC_RUN_LOG``, default ``run.mcap``): it is run as ``COMMAND TRACE.csv LOG`` and must
-turn the test's trace into a recorded run of the system (``python -m fretc.sim drive -b
-BINDINGS``: the Safe-ROS simulator driven by the trace's inputs) that the binding file of
-``tests.json`` (or the audit's search) reads. That log is judged by the pass rule of
-:mod:`fretc.testing.testrun` (:func:`fretc.testing.testrun.run_test`): a violated requirement or
-an undecided verdict fails the test, a test whose obligation the system's log does not
-exercise is skipped as "not exercised" (never passed); ``FRETC_RUN_ALL=1`` requires every
-obligation the test covers. Requirement files are named as ``fretc testgen`` was given
-them, so the file runs from the folder ``fretc testgen`` ran in.
-"""
+Design notes: ARCHITECTURE.md, `testing/pytest_file.py`."""
 
 from __future__ import annotations
 

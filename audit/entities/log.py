@@ -7,13 +7,7 @@ instance is an ordinary verdict named ``R[track=7]`` with its evidence, judged o
 entity's life (:mod:`fretc.audit.entities.read`: every entity of every per-entity requirement
 in one read of the log); a summary over the entities is added to each instance's notes.
 
-At most ``--max-entities`` entities of one requirement are judged per log
-(:data:`DEFAULT_MAX_ENTITIES` unless the option says otherwise; a bound on memory, not a
-limit of the method): past it, the requirement has one more verdict, ``R[track=...]``, an
-error saying how to raise it; the requirement's own verdict is then an error too, unless a
-judged entity violates it. Each instance has the plain audit's damage rules (the log's cut
-and gaps on its own ticks).
-"""
+Design notes: ARCHITECTURE.md, `audit/entities/log.py`."""
 
 from __future__ import annotations
 

@@ -3,17 +3,7 @@
 entity (:class:`EntityVerdict`) that has every field of
 :class:`fretc.audit.verdict.Verdict`, computed from its record when read.
 
-A log of 10^6 entities gives 10^6 verdicts: as :class:`~fretc.audit.verdict.Verdict` objects
-(31 fields, their notes, their strings) about 1.1 KB each, most of the memory of the audit;
-as records about 150 bytes each (an index, the trace's first tick and length, the verdict,
-its LTL3 verdict, robustness and interval counts, the margin at each tick). What reads them
-(the terminal's summary, the audit JSON written verdict by verdict, JUnit, the fleet's
-statistics) reads fields; what changes one (``fretc watch`` naming its URL) gets it as a
-:class:`~fretc.audit.verdict.Verdict` of its own from then on (copy on write); its mutable
-fields read as immutable values (the shared empty containers of
-:data:`fretc.audit.verdict.NO_EVIDENCE`, a tuple of notes), so a change through them raises
-instead of being lost.
-"""
+Design notes: ARCHITECTURE.md, `audit/entities/verdicts.py`."""
 
 from __future__ import annotations
 

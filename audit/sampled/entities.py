@@ -5,16 +5,7 @@ the file named by the entity's verdict (``# fretc clock 9: R[track=7]``), and th
 the file and the C runner judge each entity on its clock's rows, then the requirement over
 its entities as the audit of the log does (:func:`fretc.audit.entities.summary.summary_verdict`).
 
-A :data:`~fretc.logs.csv.source.PER_ENTITY_LINE` (``# fretc per entity: R: track``) before
-a requirement's entities says the requirement is judged per entity ``track``; its entities
-follow in the order the audit of the log gives them (their first appearance), each a clock
-line, or a :data:`~fretc.logs.csv.source.NOT_SAMPLED_LINE` with why (an entity without a
-tick, or past ``--max-entities``: an error on the file too). A per-entity line followed by
-no entity: none appeared (``vacuous``, as on the log). A requirement the log's audit could
-not judge per entity at all (its error, or ``unknown`` when the damage may have taken its
-topic) is written as a plain requirement is: a not-sampled line, or a clock of one ``cut``
-row.
-"""
+Design notes: ARCHITECTURE.md, `audit/sampled/entities.py`."""
 
 from __future__ import annotations
 

@@ -2,20 +2,7 @@
 dds://``: IDL struct types built at run time from rosbags' message definitions, the domain,
 and the raw CDR samples read and written.
 
-Cyclone DDS's Python binding hands a reader's samples to Python as their serialized bytes
-(CDR with the 4-byte encapsulation header) and writes bytes given to it, so fretc reads and
-writes each sample's CDR as it is on the wire (``ddspy_take`` / ``ddspy_write_ts``) and
-decodes it with the same decoders as a log's (:func:`fretc.logs.schema_decoder`). The struct type
-is still needed: its name ``pkg::msg::dds_::Type_`` is what DDS matches a reader to a writer
-by (ROS 2's DDS mapping, rosidl_generator_dds_idl), and its members make the XTypes type
-information Cyclone DDS sends. Members are named as ROS 2's DDS IDL names them (the field
-name and a trailing ``_``: ``boolean data_``, rosidl_generator_dds_idl's ``msg.idl.em``), in
-the definition's order; ``bool`` is ``boolean``, ``byte`` ``octet``, ``char`` ``uint8``,
-strings unbounded unless bounded in the definition. A watch's readers ignore member names
-when they match a writer's type (XTypes' type consistency, ``ignore_member_names``): a
-publisher whose types name members without the ``_`` (plain Cyclone DDS or Fast DDS
-programs) is read too, since DDS would otherwise refuse the match without a word.
-"""
+Design notes: ARCHITECTURE.md, `live/dds/idl_types.py`."""
 
 from __future__ import annotations
 

@@ -2,18 +2,7 @@
 row checked (cells, marks, the columns of the clock read, the types) and its values kept as
 compact columns, in one streaming pass over the file.
 
-Columns are :class:`array.array`: a column of true/false/1/0 cells one byte a row (0 or 1),
-a numeric column eight (``float64``, widened when its first number comes), the ``time``
-column eight (ns, ``int64``); a value not known (``unknown``, a ``gap`` row) holds 0.
-
-Rows are read :data:`CHUNK_ROWS` at a time. A chunk of plain rows (every row the header's
-number of cells, no blank or comment line, no ``gap``/``cut`` mark, no empty or unreadable
-cell, no column mixing true/false with numbers, times read and non-decreasing; a trace of
-one clock) is checked and converted column by column; any other chunk is read row by row by
-the rules of :class:`~fretc.logs.csv.source.CsvSource`, which raise its first error in file
-order. Both keep the same columns and figures (tested against a plain reading with the
-:mod:`csv` module).
-"""
+Design notes: ARCHITECTURE.md, `logs/csv/read.py`."""
 
 from __future__ import annotations
 

@@ -1,21 +1,7 @@
 """The indexed MCAP pass by columns: the messages of a log as blocks of columns per topic
 (:func:`column_pass`), for the audit's sampler (:func:`fretc.signals.sample_blocks`).
 
-It gives what :meth:`McapSource.messages` gives on the same file - the same messages, in the
-same order within each topic, with the same damage, problems, counts and data-section check
-- but a chunk at a time instead of a message at a time: a chunk's Message records are
-located by one walk over its record headers (:func:`~fretc.logs.mcap.records.
-chunk_message_table`), their channel ids and log times gathered by numpy, and the bound
-fields of each channel's messages decoded by a
-:class:`~fretc.logs.ros.columnar.ColumnarDecoder`. A group the columnar decoder does not
-read (big-endian CDR, a malformed message, ...) is decoded message by message as
-:meth:`McapSource.messages` decodes it, problems included.
-
-Order: the indexed pass opens chunks by (``message_start_time``, file offset) and merges
-their messages by (log time, chunk offset, position in the chunk)
-(:meth:`McapSource._indexed`). Here, before each chunk is opened, every message read so far
-that comes before it in that order is released, sorted: the same sequence, in blocks.
-"""
+Design notes: ARCHITECTURE.md, `logs/mcap/columns.py`."""
 
 from __future__ import annotations
 

@@ -4,18 +4,7 @@
 refused by name: no maintained Python library reads FlatBuffers by reflection from a
 ``.bfbs`` schema.
 
-Each message becomes a message object like rosbags' (attribute access: ``msg.pose.x``):
-objects of ``types.SimpleNamespace``, primitive arrays as numpy arrays (the dtype of the
-protobuf field: ``float`` is float32; JSON numbers are float64, integers int64), arrays of
-messages as lists, enum values as integers. So the same message paths bind on every encoding.
-
-For the binding checks and ``fretc inspect`` each schema is turned into a ROS 2 message
-definition (:func:`definition`): JSON Schema ``number`` is ``float64``, ``integer``
-``int64``, an object a nested message; protobuf scalar types map to their ROS equivalents;
-enum values (protobuf enums, JSON Schema ``oneOf`` of titled ``const`` values as Foxglove's
-schemas write them) become named constants (``/log.level >= ERROR``). Libraries: Python's
-``json``, ``google.protobuf`` with ``mcap-protobuf-support``'s decoder factory, ``cbor2``.
-"""
+Design notes: ARCHITECTURE.md, `logs/mcap/encodings.py`."""
 
 from __future__ import annotations
 

@@ -8,13 +8,7 @@ with a valid footer and summary is read through its chunk indexes; a file withou
 crashed recording) is read record by record from the start, as far as it goes
 (:mod:`fretc.logs.mcap.integrity` reads the damage).
 
-The layers follow the ``mcap`` library's: records (:mod:`fretc.logs.mcap.records`,
-the library's record classes), the stream of records read here, and the decoder
-(:mod:`fretc.logs.decoding`). The library's readers are not used for the passes:
-:class:`mcap.reader.SeekingReader` raises on the first damaged chunk and
-:class:`mcap.stream_reader.StreamReader` on the first damaged record, where an audit must
-skip the damage, say where it is and go on.
-"""
+Design notes: ARCHITECTURE.md, `logs/mcap/source.py`."""
 
 from __future__ import annotations
 

@@ -2,20 +2,7 @@
 (``--msg-path DIR``), for bags that store no definitions (rosbag2 sqlite3 bags of the
 Humble era) and connections whose definition is missing.
 
-A folder is searched for message definitions laid out as ROS lays them out:
-``PKG/msg/TYPE.msg`` or ``PKG/msg/TYPE.idl`` at any depth, which covers a package source tree,
-a workspace's ``src/``, and a ROS 2 ``install/`` or ``share/`` tree
-(``install/PKG/share/PKG/msg/TYPE.msg``); services ``PKG/srv/NAME.srv`` (request ``---``
-response: the types ``NAME_Request``, ``NAME_Response`` and the introspection event
-``NAME_Event`` rosbag2 records, with ``service_msgs/ServiceEventInfo``) and actions
-``PKG/action/NAME.action`` (goal ``---`` result ``---`` feedback: ``NAME_Goal``,
-``NAME_Result``, ``NAME_Feedback``, the feedback topic's ``NAME_FeedbackMessage`` and the
-``NAME_SendGoal`` and ``NAME_GetResult`` services' request and response), as rosidl
-generates them. The types found are added to ROS 2 Humble's
-standard messages (rosbags' type store), which serve the standard packages (``std_msgs``,
-``geometry_msgs``, ``sensor_msgs``, ...) of bags that store no definitions; a folder that
-defines a standard type differently is an input error naming the file.
-"""
+Design notes: ARCHITECTURE.md, `logs/ros/msg_path.py`."""
 
 from __future__ import annotations
 

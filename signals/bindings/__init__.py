@@ -8,14 +8,11 @@ text so that one requirement set audits the simulator and the robot (../shared/D
 units, NaN and LaserScan rules (REP 117) are docs/bindings.md; the modules, in the order they
 build on each other, are in ARCHITECTURE.md ("The binding language").
 
-Each binding is parsed once (Lark, LALR) and compiled to nested closures (no eval of user
-text): :meth:`Binding.evaluate` for one tick, :meth:`Binding.evaluate_columns` for all ticks
-at once with numpy. Errors name the binding file, line and column and the variable.
-
 May import: ``fretc.common``, ``fretc.fretish`` and ``fretc.logs`` (the schemas of a log's
 types, the names of its encodings' constants) for the type checks; it sits below the rest
 of ``fretc.signals`` (the sampling), which uses it.
-"""
+
+Design notes: ARCHITECTURE.md, `signals/bindings/__init__.py`."""
 
 from __future__ import annotations
 

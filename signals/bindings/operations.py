@@ -10,14 +10,7 @@ but ``min``/``max`` of LaserScan ranges with no valid return and an invalid meas
 (REP 117: NaN, a value outside the limits) → NaN, unknown (a blind LiDAR is no clear path),
 and ``invalid(ranges)`` counts the invalid measurements.
 
-NaN in comparisons (docs/bindings.md, "NaN"): under the default policy (``[tick] nan =
-"unread"``) a comparison with a NaN operand is neither true nor false: its value is NaN, and
-the logical operators follow Kleene's three-valued logic (``false & NaN`` is false, ``true |
-NaN`` is true, anything else with NaN is NaN; ``any``/``all`` of items likewise, ``count`` of
-items of which one is NaN is NaN). A boolean binding that is NaN at a tick makes that tick
-unread for the requirements that read it (:mod:`fretc.monitors.nan`). Under ``[tick] nan =
-"false"`` comparisons follow IEEE 754 (false; ``!=`` true).
-"""
+Design notes: ARCHITECTURE.md, `signals/bindings/operations.py`."""
 
 from __future__ import annotations
 

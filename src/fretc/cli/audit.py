@@ -1,22 +1,6 @@
 """``fretc audit``: check recorded runs against FRETish requirements (click command).
 
-::
-
-    fretc audit [--requirements PATH]... [--bindings FILE]... [--bind NAME=EXPR]...
-                [--tick-period "100 ms" | --tick-topic /scan] [--time-base log|header]
-                [-j N] [--json FILE] [--junit FILE] [--no-progress] LOGS...
-
-LOGS are ``.mcap`` files (ROS 1 or ROS 2 encodings), ROS 1 ``.bag`` files, rosbag2 folders,
-``.csv`` traces, or folders searched for them. Binding files default to every
-``*.bindings.toml`` beside the requirement files or folders. Exit status
-(:data:`fretc.audit.verdict.EXIT_CODES`): 0 every verdict satisfied (or vacuous) on
-complete logs, 1 a requirement is violated (a probability requirement: fails over the
-logs, :mod:`fretc.audit.fleet.statistics`), 2 usage or input errors (including a
-requirement that could not be audited on some log), 3 no violation but a log is partial or
-had data problems (``--allow-partial``: 0), 5 a probability requirement is undecided.
-
-Only click is imported at module level; the engine loads on first use.
-"""
+Design notes: ARCHITECTURE.md, `fretc/cli/audit.py`."""
 
 from __future__ import annotations
 

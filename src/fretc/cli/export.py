@@ -4,16 +4,7 @@ command; the writers are :mod:`fretc.reports.export_reqif`, :mod:`fretc.reports.
 :mod:`fretc.reports.export_fret`, :mod:`fretc.reports.export_needs`,
 :mod:`fretc.reports.export_sdoc`, :mod:`fretc.reports.matrix`).
 
-::
-
-    fretc export -r requirements.reqif --from-json audit.json -o out.reqif
-    fretc export -r doorstop_tree/ --from-json audit.json -o out_tree/ --matrix matrix.csv
-    fretc export -r fret_export.json --from-json audit.json -o out.json
-    fretc export --from-json audit.json --needs needs.json --sdoc results.sdoc
-
-Everything is computed before anything is written, and each file is written through a
-temporary file renamed into place: on an error nothing is written (exit code 2).
-"""
+Design notes: ARCHITECTURE.md, `fretc/cli/export.py`."""
 
 from __future__ import annotations
 

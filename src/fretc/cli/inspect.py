@@ -1,21 +1,6 @@
 """``fretc inspect LOG... [--json]``: what a log holds, to write its signal bindings.
 
-Per log: kind, time span, and per topic its message type, message count, mean rate, and
-every field path of the type in binding syntax, as it binds when pasted into a binding
-(``/odom.twist.twist.linear.x``; a topic that is not a plain ROS name quoted,
-``"ORB-SLAM".pose.position.x``; items of a message array as ``[:]``, Foxglove's slice of
-every item) with its ROS type, for arrays the lengths seen, for numeric fields the minimum
-and maximum over the log (finite values; NaN and infinities counted apart, printed in plain
-notation), for booleans how often each value occurs, for text fields their distinct values
-(up to :data:`MAX_VALUES`) and for fields with named constants in their message definition
-(``power_supply_status``: ``POWER_SUPPLY_STATUS_CHARGING = 1``, DiagnosticStatus ``level``:
-``OK`` .. ``STALE``) those constants. Field types come from the schemas embedded in the log
-(:mod:`fretc.logs.schema`); values from one read of every message. A topic whose messages
-decode without a schema that lists their fields (a JSON channel with no schema, or a
-JSON Schema without ``properties``) gets its fields from the messages themselves, typed by
-their JSON values (``number``, ``boolean``, ``string``, ``number[]``, ``object[]``): the
-paths the audit binds on it; such a topic is marked "fields from the messages".
-"""
+Design notes: ARCHITECTURE.md, `fretc/cli/inspect.py`."""
 
 from __future__ import annotations
 

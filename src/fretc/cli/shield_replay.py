@@ -1,20 +1,7 @@
 """``fretc shield-replay``: a generated shield run over recorded runs
 (:mod:`fretc.shield.replay`): what the Safety System would have done on the robot's runs.
 
-::
-
-    fretc shield-replay SHIELD_DIR LOGS... -o DIR [-r FILE]... [--json FILE]
-
-For each log, writes ``DIR/NAME.shielded.mcap`` (every recorded message as it was, the
-shield's corrected outputs added on their topics at each tick), prints the overrides per
-requirement and the audit of the shielded run. Exit status: the audit's of the shielded
-runs (0 every verdict satisfied or vacuous, 1 a requirement violated, 3 a log partial or
-with data problems, an unknown verdict, a recording damaged even where no message was lost,
-a fault the shield did not answer); 2 input errors (the folder, a log, a topic, a log time
-named; a recording damaged before any message the shield reads); 6 no violation, and the
-audit's 3 is the faults' alone: ticks with an unreadable input, every one answered by the
-shield (:func:`faults_code`).
-"""
+Design notes: ARCHITECTURE.md, `fretc/cli/shield_replay.py`."""
 
 from __future__ import annotations
 

@@ -7,14 +7,7 @@ and the test passes, fails, is unknown or not exercised by the pass rule of
 obligation the test was generated for exercised on the system's log; with
 ``--all-obligations`` every obligation the test covers).
 
-Run from the folder ``fretc testgen`` ran in (tests.json names the requirement files as it
-was given them). ``--json FILE`` writes ``{"tests": [{"id", "outcome", "verdicts",
-"violated", "undecided", "not_exercised": [{"requirement", "obligation"}], "exercised",
-"log", "error", "generated_for"}], "summary": {outcome: count}}``.
-
-Exit codes: 0 every test passed, 1 some test failed (a requirement violated on the system's
-log), 3 none failed but some is unknown or not exercised, 2 an input error.
-"""
+Design notes: ARCHITECTURE.md, `fretc/cli/testrun.py`."""
 
 from __future__ import annotations
 
