@@ -3,39 +3,7 @@
 (:class:`~fretc.live.websocket.rosbridge.RosbridgeClient`), DDS or Zenoh
 (:mod:`fretc.live.transports`).
 
-One engine, three places (../shared/DESIGN.md): the watch runs the *same* pieces as an audit
-of a recorded log, only fed live:
-
-* :class:`~fretc.live.source.WatchSource` is a :class:`fretc.logs.LogSource` whose messages
-  come from a client instead of a file; each channel is decoded from the schema text the
-  server advertised (:func:`fretc.logs.schema_decoder`, shared with the MCAP reader: rosbags
-  for ROS messages);
-* the ticks come from :func:`fretc.signals.sample` with the same bindings (tick, time
-  base: the server's log time or ``header.stamp``, sample and hold, warm-up) as an audit;
-* every tick steps the generated monitors the audit loads (:func:`fretc.audit.load_plan`)
-  for the live verdicts and events;
-* at the end the verdicts and evidence are made by the audit's own code
-  (:func:`fretc.audit.finalize.finalize`) over the columns kept while watching;
-* per-entity requirements (``$track``) get their verdicts at the end, from the audit's own code over
-  the messages kept for them (:mod:`fretc.live.entities`; live events:
-  :mod:`fretc.live.entity_events`).
-
-The run ends with the server's orderly close, every bound topic unadvertised, the
-duration, ``until_idle`` or :meth:`Watch.stop` (Ctrl-C); none of these is a data problem, and
-the final verdicts are FRET's finite-trace verdicts at the last tick, as the audit's at the
-end of a log. So the same messages give the same verdicts as ``fretc audit`` (tested: each
-shipped trace and a real log served by ``fretc replay --serve`` and by a rosbridge-protocol
-server, watched to the end, equal its audit; a ``--record``\\ ed watch audited offline
-equals the watch).
-
-The faults of a live run are data problems (:mod:`fretc.live.source`).
-
-Verdict events (:class:`WatchEvent`) are produced while watching: ``pt`` (the past-time
-verdict changed), ``ltl3`` (the LTL3 verdict became definite), ``problem``, ``gap`` and, at the
-end, ``end`` (why the run ended) and ``final`` (one per requirement). ``--jsonl`` prints them;
-``--record`` writes them to the ``/fretc/verdicts`` channel of the recording (foxglove.Log,
-like ``fretc report --annotate``) beside every message the watch used.
-"""
+Design notes: ARCHITECTURE.md, `live/watch.py`."""
 
 from __future__ import annotations
 

@@ -2,29 +2,7 @@
 results linked to the requirements, for a StrictDoc project that holds the requirements
 (StrictDoc resolves a relation by the UID of a node of any document of the project).
 
-The document declares its own grammar (StrictDoc's "custom grammar": ``[GRAMMAR]``,
-``ELEMENTS``) with two elements, each with a ``Parent`` relation to the requirement it
-verifies (the requirement's id is its UID; the Parent relation is how StrictDoc links a
-node to what it refines or verifies):
-
-* ``VERIFICATION``, one per requirement of the audit (and item without FRETish text), UID
-  ``FRETC-<id>``: its result over the runs (``VERDICT``, ``STATUS``), the evidence
-  (``STATEMENT``), the formulas (``FT``, ``PT``), for a parent the roll-up (``ROLLUP``,
-  ``ROLLUP_PATH``, :mod:`fretc.reports.rollup`), ``AUDIT_ID``, ``AUDIT_DATE``;
-* ``TEST_RESULT``, one per requirement and run, UID ``FRETC-<id>/run-<n>`` (``n`` the run's
-  1-based place in the audit): ``STATUS`` (``PASSED`` satisfied or vacuous, ``FAILED``
-  violated, ``ERROR`` otherwise: StrictDoc's JUnit test-report words), ``VERDICT``,
-  ``VACUOUS``, ``LOG``, ``FIRST_VIOLATION_LOG_TIME_NS``, ``FIRST_VIOLATION``,
-  ``ROBUSTNESS``.
-
-StrictDoc's own rules for the text (its grammar, ``strictdoc/backend/sdoc/grammar``): a
-single-line value starts with a non-space character and holds no line break; a field with
-no value is left out; a UID matches ``[\\w]+[\\w()\\-/.: ]*``: characters it does not take
-are written ``_``, and UIDs that come out equal (``R#2`` and ``R$2``) are made unique with
-``-(2)``, ``-(3)``... in document order; a requirement whose id is no UID gets no Parent relation
-(the result names it in ``TITLE``, and :func:`sdoc_text` says so in ``notes``).
-Deterministic.
-"""
+Design notes: ARCHITECTURE.md, `reports/export_sdoc.py`."""
 
 from __future__ import annotations
 

@@ -9,23 +9,7 @@ every input the environment may give. Safe-ROS's is the stop (``stopped``, ``for
 ``stop_requested``, zero speeds): each of R2, R3, R4, R6 holds whatever came before and
 whatever the scan says.
 
-The user may declare it (``fretc shield --fallback``, or ``[shield] fallback`` in the
-binding file); a declared fallback that is not in ``robust`` is refused with the atom and
-the requirements it breaks. Otherwise the shield takes the robust valuation the node table
-reaches first taking each atom's ``--prefer``\\ red value, then false, where it can (a
-fixed order: the same shield gives the same fallback). The numbers: a declared one as
-given; else **rest**, 0, whenever the valuation's truths allow it (a stopped actuator: the
-message the bindings solved for the valuation may read 0.009 m/s as "not moving" too, and
-was the fallback; the host's message is made from the decided values and checked, so 0 is
-published); else the number of the message the bindings give for the valuation, the
-recorded numbers of a cluster, or the number nearest 0 with the valuation's truths (an
-output bounded by the inputs, :mod:`fretc.check.bounds`: rest, 0, or the number nearest 0
-with its comparisons with constants; its bounds read the inputs, which such a tick cannot
-read, so its bounds' truths are the fallback's only where the inputs allow). When no
-valuation is robust there is no fallback (noted): the forms then give no outputs at such a tick (Python: an empty
-``Decision.outputs``; C: ``-1``, the corrected outputs untouched; the ROS 2 node publishes
-nothing but ``/diagnostics``).
-"""
+Design notes: ARCHITECTURE.md, `shield/fallback.py`."""
 
 from __future__ import annotations
 

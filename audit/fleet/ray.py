@@ -8,36 +8,7 @@ binding expressions (recompiled on the worker: their evaluators are closures). E
 runs :func:`fretc.audit.audit_log`, the same engine as a local run, so the JSON, JUnit,
 report and exit code are those of ``-j 1``; results are put back in the order of the logs.
 
-Faults (the rule: nothing is reported satisfied that was not audited):
-
-* a task that raises, or a worker process that dies (``WorkerCrashedError``, a lost node),
-  gives that log an error entry (:func:`error_audit`: every verdict ``error`` with the
-  reason, exit code 2) and the other logs complete;
-* the driver's raylet lost (killed, out of memory): Ray ends its driver process, so the
-  driver runs in a child process (:mod:`fretc.audit.fleet.ray_driver`); the logs whose results
-  had arrived keep their verdicts, every other log gets an error entry naming the loss, and
-  the JSON, reports and exit code (2) are written as for any error entry;
-* ``retries``: a task whose worker died is run again up to this many times (Ray's
-  ``max_retries``; exceptions raised by the audit itself are not retried: they would raise
-  again);
-* Ctrl-C is passed on to the driver process: it cancels the tasks still running
-  (``ray.cancel(force=True)``) and stops the local Ray it started; then
-  ``KeyboardInterrupt`` is re-raised here.
-
-Where Ray runs (:func:`connect`): ``address`` None or ``"local"`` starts a local Ray for the
-run (``num_cpus`` = the machine's CPUs, no dashboard web server (Ray's per-node dashboard
-agent process still starts: Ray uses it for runtime environments and metrics and has no
-supported switch for it), quiet logs, usage statistics off, so
-nothing is sent to the network; Ray's own servers still listen on the node's address, as Ray
-resolves 127.0.0.1 to it) and stops it at the end; ``"auto"``,
-``"ray://host:10001"`` or ``host:port`` connect to an existing cluster, whose workers must
-have fretc installed (``pip install 'fretc[ray]'``) and see the log paths (shared storage).
-
-Log lists (:func:`fretc.audit.discovery.expand_log_args`, also for local runs): paths,
-folders, globs (``**`` allowed) and ``@FILE`` (one path or glob per line, ``#`` comments;
-relative paths start at FILE's folder), so a cluster job can be started from an index of a
-fleet's recordings.
-"""
+Design notes: ARCHITECTURE.md, `audit/fleet/ray.py`."""
 
 from __future__ import annotations
 
