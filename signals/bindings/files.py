@@ -152,30 +152,31 @@ def _tick_table(doc: dict[str, Any], source: str, loc: _Locations
                                "nominal_rate, time, header_lag, nan, inf)", line=line, col=col)
     tick = _tick_clock(tick_t, source, loc)
     if "nan" in tick_t:
-        if tick_t["nan"] not in NAN_POLICIES:
-            line, col = loc.at("tick", "nan")
-            raise BindingError(source, f"[tick] nan must be \"unread\" or \"false\", not "
-                               f"{tick_t['nan']!r}", line=line, col=col)
-        tick = dataclasses.replace(tick, nan=tick_t["nan"])
+        tick = dataclasses.replace(tick, nan=_one_of(tick_t, "nan", NAN_POLICIES, source, loc))
     if "inf" in tick_t:
-        if tick_t["inf"] not in INF_POLICIES:
-            line, col = loc.at("tick", "inf")
-            raise BindingError(source, f"[tick] inf must be \"unread\" or \"value\", not "
-                               f"{tick_t['inf']!r}", line=line, col=col)
-        tick = dataclasses.replace(tick, inf=tick_t["inf"])
+        tick = dataclasses.replace(tick, inf=_one_of(tick_t, "inf", INF_POLICIES, source, loc))
     if "period" in tick_t and "nominal_rate" in tick_t:
         line, col = loc.at("tick", "nominal_rate")
         raise BindingError(source, "[tick] nominal_rate goes with topic = \"/...\" (a fixed "
                            "period is its own rate)", line=line, col=col)
-    time_base = tick_t.get("time", "log")
-    if time_base not in TIME_BASES:
-        line, col = loc.at("tick", "time")
-        raise BindingError(source, f"[tick] time must be \"log\", \"header\" or "
-                           f"\"header-where-stamped\", not {time_base!r}", line=line, col=col)
+    time_base = _one_of({"time": "log", **tick_t}, "time", TIME_BASES, source, loc)
     lag = DEFAULT_HEADER_LAG_NS
     if "header_lag" in tick_t:
         lag = _duration(tick_t, "header_lag", source, loc)
     return tick, time_base, lag
+
+
+def _one_of(table: dict[str, Any], key: str, allowed: tuple[str, ...], source: str,
+            loc: _Locations) -> str:
+    """``[tick] key``'s value, one of ``allowed``. Raises :class:`BindingError` at the key
+    naming the values allowed."""
+    value = table[key]
+    if value not in allowed:
+        line, col = loc.at("tick", key)
+        words = ", ".join(f'"{a}"' for a in allowed[:-1]) + f' or "{allowed[-1]}"'
+        raise BindingError(source, f"[tick] {key} must be {words}, not {value!r}",
+                           line=line, col=col)
+    return value
 
 
 def _variables_table(doc: dict[str, Any], source: str, loc: _Locations
