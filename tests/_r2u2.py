@@ -15,7 +15,7 @@ Facts of R2U2 used here, all of the commit ``tools/r2u2/build.sh`` pins (its
 * the trace: a CSV with a ``#`` header line (skipped), one row a tick, columns in the order of
   C2PO's signal map; with the Booleanizer a value with a decimal point is read as a float,
   one without as an integer (so floats are written with a point, Booleans as ``0``/``1``);
-* the engine's bounds (instructions, temporal operators, SCQ slots...) are fixed when it is
+* the engine's bounds (signals, nodes, temporal operators, SCQ slots ...) are fixed when it is
   built; a binary over them makes the engine print nothing and exit 0, so the specifications
   are compiled in batches that C2PO's ``write_bounds_c`` says fit, and every tick of every
   formula must have a verdict;
