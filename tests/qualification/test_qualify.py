@@ -49,8 +49,10 @@ def test_qualify_passes_on_this_installation_and_writes_only_its_folder(tmp_path
     assert dists["click"]["required"] and len(dists["click"]["sha256"]) == 64
     results = {r["id"]: r["result"] for r in doc["requirements"]}
     assert results["TOR-SEM-006"] == results["TOR-TCK-003"] == "passed"
-    assert set(results.values()) == {"passed", "not checked here", "not verified"}
-    assert results["TOR-GEN-006"] == "not verified"
+    assert set(results.values()) == {"passed", "not checked here"}
+    # R2U2's C2PO: shown by the traced tests where R2U2 is built (tools/r2u2/build.sh), no
+    # check of qualify's
+    assert results["TOR-GEN-006"] == "not checked here"
     # on site: every T3 requirement but those needing a ROS 2 graph, AJPF or R2U2 shown, and
     # at least 90 % of all (the kit's figure, docs/qualification/index.md)
     from fretc.qualification.catalogue import load_requirements
