@@ -11,6 +11,7 @@ import itertools
 from collections.abc import Callable, Sequence
 from typing import Any
 
+from fretc.common.grouping import connected_groups
 from fretc.compiler import ir
 from fretc.compiler.ir import Node
 from fretc.compiler.printers import to_spot
@@ -244,27 +245,7 @@ class Checker:
     # ---------------------------------------------------------------- groups
     def groups(self) -> list[list[CheckItem]]:
         """Requirements grouped by shared variables (union-find), in input order."""
-        parent = list(range(len(self.items)))
-
-        def find(i):
-            while parent[i] != i:
-                parent[i] = parent[parent[i]]
-                i = parent[i]
-            return i
-
-        owner: dict[str, int] = {}
-        for k, item in enumerate(self.items):
-            for v in item.variables:
-                if v in owner:
-                    a, b = find(owner[v]), find(k)
-                    if a != b:
-                        parent[max(a, b)] = min(a, b)
-                else:
-                    owner[v] = k
-        groups: dict[int, list[CheckItem]] = {}
-        for k, item in enumerate(self.items):
-            groups.setdefault(find(k), []).append(item)
-        return list(groups.values())
+        return connected_groups(self.items, lambda item: item.variables)
 
     # ---------------------------------------------------------------- subsets
     def minimal_subsets(self, pool: Sequence[CheckItem], must: Sequence[CheckItem],

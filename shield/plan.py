@@ -19,6 +19,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from fretc.check.bounds import Bound, bounds_of, feasibility
+from fretc.common.grouping import connected_groups
 from fretc.check.items import CheckItem, make_item
 from fretc.check.numeric_abstraction import NumericAbstraction, simple_comparison
 from fretc.check.pt_monitor import Outside
@@ -412,64 +413,17 @@ def _message_groups(outputs: list[str], bindings: Bindings | None) -> list[list[
     variable alone on its topics is a group of one (its messages are made the same way)."""
     if bindings is None:
         return []
-    owner: dict[str, str] = {}
-    parent = {v: v for v in outputs if v in bindings.variables}
-
-    def find(v: str) -> str:
-        while parent[v] != v:
-            v = parent[v]
-        return v
-
-    for v in parent:
-        for t in bindings.variables[v].topics:
-            if t in owner:
-                a, b = find(owner[t]), find(v)
-                if a != b:
-                    parent[max(a, b)] = min(a, b)
-            else:
-                owner[t] = v
-    out: dict[str, list[str]] = {}
-    for v in parent:
-        out.setdefault(find(v), []).append(v)
-    return list(out.values())
+    variables = [v for v in outputs if v in bindings.variables]
+    return connected_groups(variables, lambda v: bindings.variables[v].topics)
 
 
 def _components(items: list[CheckItem], groups: list[list[str]]) -> list[list[CheckItem]]:
     """Requirements grouped by shared variables and by ``groups`` (outputs of one message,
     of one twist), input order."""
-    parent = list(range(len(items)))
-
-    def find(i: int) -> int:
-        while parent[i] != i:
-            i = parent[i]
-        return i
-
-    rep: dict[str, str] = {}  # (variables joined by a group: one representative)
-
-    def root(v: str) -> str:
-        while rep.get(v, v) != v:
-            v = rep[v]
-        return v
-
-    for g in groups:
-        for v in g[1:]:
-            x, y = root(g[0]), root(v)
-            if x != y:
-                rep[max(x, y)] = min(x, y)
-    owner: dict[str, int] = {}
-    for k, item in enumerate(items):
-        for v in item.variables:
-            v = root(v)
-            if v in owner:
-                a, b = find(owner[v]), find(k)
-                if a != b:
-                    parent[max(a, b)] = min(a, b)
-            else:
-                owner[v] = k
-    out: dict[int, list[CheckItem]] = {}
-    for k, item in enumerate(items):
-        out.setdefault(find(k), []).append(item)
-    return list(out.values())
+    joined = connected_groups(groups, lambda g: g)  # groups that share a variable
+    one = {v: k for k, gs in enumerate(joined) for g in gs for v in g}
+    return connected_groups(items, lambda item: [(one[v],) if v in one else v
+                                                 for v in item.variables])
 
 
 def _component(items: list[CheckItem], inputs: list[str], groups: list[list[str]],
