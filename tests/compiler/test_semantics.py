@@ -298,6 +298,26 @@ def test_units_without_tick_period_behave_like_fret_and_warn():
     assert not f.warnings
 
 
+@pytest.mark.tor("TOR-SEM-010")
+def test_duration_errors_name_the_duration_and_zero_is_a_duration():
+    """Each refusal of a duration that is not whole says which it is (the mutation campaign,
+    docs/qualification/mutation.md, found these unchecked), and 0 is a whole number of
+    ticks."""
+    upon = "upon p the sw shall within {} satisfy q"
+    with pytest.raises(SemanticsError, match=r"^'150 milliseconds' is 1.5 ticks of 100 ms: "):
+        formalize(parse(upon.format("150 milliseconds")), tick_period=Fraction(1, 10))
+    # a fractional number of ticks, with or without a tick period: no period to blame
+    with pytest.raises(SemanticsError, match=r"^duration '2.5 ticks' is not a whole number "
+                                             r"of ticks$"):
+        formalize(parse(upon.format("2.5 ticks")), tick_period=Fraction(1, 10))
+    # a time unit without a tick period: read as ticks, so 2.5 of them, and the fix named
+    with pytest.raises(SemanticsError, match=r"^duration '2.5 seconds' is not a whole number "
+                                             r"of ticks; declare a tick period"):
+        formalize(parse(upon.format("2.5 seconds")))
+    f = formalize(parse(upon.format("0 seconds")), tick_period=Fraction(1, 10))
+    assert f.ticks == 0 and not f.warnings
+
+
 def test_r1_formulas_are_the_papers():
     f = formalize(parse("whenever too_close agilex_agent shall eventually satisfy stopped"))
     assert to_smv(f.ft_inf) == "(G (too_close -> (F stopped)))"
