@@ -18,8 +18,10 @@ by ``tests/tor_matrix.py``) must kill those mutants. For each area asked for:
 3. the per-mutant timeout is ``--timeout-factor`` (3) times the baseline's wall time;
 4. ``cosmic-ray init`` lists the work items (one mutant each) in the session file, an
    sqlite database;
-5. the mutants outside the area (a ``path::name`` entry keeps the lines of that definition)
-   and, with ``--sample N``, all but N of the others, chosen by ``random.Random(seed)`` over
+5. the mutants outside the area (a ``path::name`` entry keeps the lines of that definition),
+   those inside an annotation of a module that postpones their evaluation (``from
+   __future__ import annotations``: equivalent mutants, counted apart) and, with
+   ``--sample N``, all but N of the others, chosen by ``random.Random(seed)`` over
    the job ids in sorted order (the same ones on every run of the same tree), are marked
    *skipped* through cosmic-ray's own session interface
    (``WorkDB.set_multiple_results`` with ``WorkerOutcome.SKIPPED``, what cosmic-ray's
@@ -27,7 +29,7 @@ by ``tests/tor_matrix.py``) must kill those mutants. For each area asked for:
    without a result;
 6. ``cosmic-ray exec`` runs the rest, and the results are read back from the session
    (``WorkDB.completed_work_items``) into a JSON report: per area the mutants in the area,
-   run, killed, survived, timed out, incompetent (the test command could not start, or the
+   in its annotations, run, killed, survived, timed out, incompetent (the test command could not start, or the
    mutant does not compile) and skipped, each survivor with its file, line, operator and
    diff, and the baseline's time and the command.
 
@@ -203,27 +205,67 @@ def _in_ranges(line_from: int, line_to: int, ranges: list[tuple[int, int]] | Non
     return ranges is None or any(line_from <= b and a <= line_to for a, b in ranges)
 
 
+Span = tuple[tuple[int, int], tuple[int, int]]
+#: the output of the skipped results of mutants inside an annotation
+ANNOTATION = "mutation_campaign: an annotation, never evaluated (equivalent)"
+
+
+def annotation_spans(path: Path) -> list[Span]:
+    """The (line, column) spans of a module's annotations when the module postpones their
+    evaluation (``from __future__ import annotations``): a mutant inside one changes a string
+    nobody evaluates, an equivalent mutant. Empty for a module that evaluates them. (Columns
+    are the ast's, UTF-8 bytes; cosmic-ray's count characters: the same on ASCII lines.)"""
+    tree = ast.parse(path.read_text(encoding="utf-8"))
+    if not any(isinstance(n, ast.ImportFrom) and n.module == "__future__"
+               and any(a.name == "annotations" for a in n.names) for n in tree.body):
+        return []
+    notes: list[ast.expr] = []
+    for node in ast.walk(tree):
+        if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
+            a = node.args
+            notes += [x.annotation for x in (*a.posonlyargs, *a.args, *a.kwonlyargs,
+                                             a.vararg, a.kwarg)
+                      if x is not None and x.annotation is not None]
+            notes += [node.returns] if node.returns is not None else []
+        elif isinstance(node, ast.AnnAssign):
+            notes.append(node.annotation)
+    return [((n.lineno, n.col_offset), (n.end_lineno or n.lineno, n.end_col_offset or 0))
+            for n in notes]
+
+
 def select(session: Path, ranges: dict[str, list[tuple[int, int]] | None],
-           sample: int | None, seed: int) -> tuple[int, int]:
-    """Mark the work items outside the area, and those the sample leaves out, skipped in the
-    session; return (mutants in the area, mutants kept)."""
+           notes: dict[str, list[Span]], sample: int | None, seed: int) -> dict[str, int]:
+    """Mark skipped in the session the work items outside the area, those inside an
+    annotation (``notes``, :func:`annotation_spans`) and those the sample leaves out; return
+    the counts of mutants in the area, in its annotations, and kept."""
     from cosmic_ray.work_db import WorkDB, use_db
     from cosmic_ray.work_item import WorkerOutcome, WorkResult
+
+    def noted(m: Any) -> bool:
+        return any(a <= tuple(m.start_pos) and tuple(m.end_pos) <= b
+                   for a, b in notes.get(str(m.module_path), []))
 
     with use_db(str(session), WorkDB.Mode.open) as db:
         items = sorted(db.pending_work_items, key=lambda w: w.job_id)
         inside = [w.job_id for w in items
                   if all(_in_ranges(m.start_pos[0], m.end_pos[0], ranges.get(str(m.module_path)))
                          for m in w.mutations)]
-        kept = set(inside)
-        if sample is not None and sample < len(inside):
-            kept = set(random.Random(seed).sample(inside, sample))
-        skip = [w.job_id for w in items if w.job_id not in kept]
+        annotated = {w.job_id for w in items
+                     if w.job_id in set(inside) and all(noted(m) for m in w.mutations)}
+        rest = [j for j in inside if j not in annotated]
+        kept = set(rest)
+        if sample is not None and sample < len(rest):
+            kept = set(random.Random(seed).sample(rest, sample))
+        if annotated:
+            db.set_multiple_results(sorted(annotated), WorkResult(
+                worker_outcome=WorkerOutcome.SKIPPED, output=ANNOTATION))
+        skip = [w.job_id for w in items if w.job_id not in kept and w.job_id not in annotated]
         if skip:
             db.set_multiple_results(skip, WorkResult(
                 worker_outcome=WorkerOutcome.SKIPPED,
                 output="mutation_campaign: outside the area or not sampled"))
-    return len(inside), len(kept)
+    return {"mutants_in_area": len(inside), "annotation_mutants": len(annotated),
+            "sampled": len(kept)}
 
 
 def results(session: Path) -> dict[str, Any]:
@@ -277,22 +319,25 @@ def run_area(area: Area, args: argparse.Namespace) -> dict[str, Any]:
     bindir = Path(sys.executable).parent
     subprocess.run([str(bindir / "cosmic-ray"), "init", str(config), str(session)],
                    cwd=clone, check=True)
-    in_area, kept = select(session, line_ranges(area, clone), args.sample, args.seed)
+    notes = {m: annotation_spans(clone / m) for m in _modules(area)}
+    counts = select(session, line_ranges(area, clone), notes, args.sample, args.seed)
     start = time.perf_counter()
     subprocess.run([str(bindir / "cosmic-ray"), "exec", str(config), str(session)],
                    cwd=clone, check=True)
     return {"area": area.name, "requirement_area": area.requirement_area,
             "source": list(area.source), "tors": list(area.tors), "tests": nodes,
             "commit": commit, "baseline_s": round(took, 1), "timeout_s": round(timeout, 1),
-            "exec_s": round(time.perf_counter() - start, 1), "mutants_in_area": in_area,
-            "sampled": kept, "sample": args.sample, "seed": args.seed,
+            "exec_s": round(time.perf_counter() - start, 1), **counts,
+            "sample": args.sample, "seed": args.seed,
             "test_command": command, **results(session)}
 
 
 def table(report: list[dict[str, Any]]) -> str:
     """The report as a plain-text table."""
-    cols = ("area", "mutants_in_area", "run", "killed", "survived", "timeout", "incompetent")
-    head = ("area", "in area", "run", "killed", "survived", "timeout", "incompetent")
+    cols = ("area", "mutants_in_area", "annotation_mutants", "run", "killed", "survived",
+            "timeout", "incompetent")
+    head = ("area", "in area", "annotations", "run", "killed", "survived", "timeout",
+            "incompetent")
     rows = [head] + [tuple(str(r[c]) for c in cols) for r in report]
     widths = [max(len(r[i]) for r in rows) for i in range(len(cols))]
     return "\n".join("  ".join(c.ljust(w) for c, w in zip(r, widths)) for r in rows)
