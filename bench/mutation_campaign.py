@@ -22,7 +22,8 @@ by ``tests/tor_matrix.py``) must kill those mutants. For each area asked for:
    those inside an annotation of a module that postpones their evaluation (``from
    __future__ import annotations``: equivalent mutants, counted apart) and, with
    ``--sample N``, all but N of the others, chosen by ``random.Random(seed)`` over
-   the job ids in sorted order (the same ones on every run of the same tree), are marked
+   the mutants sorted by file, position, operator and occurrence (cosmic-ray's job ids are
+   random: the same mutants on every run of the same tree), are marked
    *skipped* through cosmic-ray's own session interface
    (``WorkDB.set_multiple_results`` with ``WorkerOutcome.SKIPPED``, what cosmic-ray's
    filters such as ``cr-filter-lines`` do): ``cosmic-ray exec`` runs only the work items
@@ -233,6 +234,13 @@ def annotation_spans(path: Path) -> list[Span]:
             for n in notes]
 
 
+def _place(item: Any) -> tuple[Any, ...]:
+    """A work item's sort key from its mutations (file, position, operator, occurrence):
+    cosmic-ray's job ids are random (uuid4), its mutations the same on every init."""
+    return tuple((str(m.module_path), tuple(m.start_pos), tuple(m.end_pos), m.operator_name,
+                  m.occurrence) for m in item.mutations)
+
+
 def select(session: Path, ranges: dict[str, list[tuple[int, int]] | None],
            notes: dict[str, list[Span]], sample: int | None, seed: int) -> dict[str, int]:
     """Mark skipped in the session the work items outside the area, those inside an
@@ -246,7 +254,7 @@ def select(session: Path, ranges: dict[str, list[tuple[int, int]] | None],
                    for a, b in notes.get(str(m.module_path), []))
 
     with use_db(str(session), WorkDB.Mode.open) as db:
-        items = sorted(db.pending_work_items, key=lambda w: w.job_id)
+        items = sorted(db.pending_work_items, key=_place)
         inside = [w.job_id for w in items
                   if all(_in_ranges(m.start_pos[0], m.end_pos[0], ranges.get(str(m.module_path)))
                          for m in w.mutations)]
