@@ -25,6 +25,7 @@ from fretc.compiler import ir
 from fretc.compiler.evaluate import ft_at, pt_at
 from fretc.compiler.printers import mangle, to_smv, to_spot
 from fretc.compiler.semantics import SemanticsError, formalize
+from fretc.fretish.limits import MAX_DURATION_TICKS
 from fretc.fretish import ast as A
 from fretc.fretish import FretishError, parse
 
@@ -316,6 +317,17 @@ def test_duration_errors_name_the_duration_and_zero_is_a_duration():
         formalize(parse(upon.format("2.5 seconds")))
     f = formalize(parse(upon.format("0 seconds")), tick_period=Fraction(1, 10))
     assert f.ticks == 0 and not f.warnings
+    # the largest duration a monitor keeps converts exactly too
+    f = formalize(parse(upon.format("100 seconds")), tick_period=Fraction(1, 10_000))
+    assert f.ticks == MAX_DURATION_TICKS
+
+
+def test_a_duration_past_the_limit_in_ticks_is_an_error():
+    """The limit of a duration (fretc.fretish.limits) holds after the conversion too: no
+    requirement states it, so this test is traced to none."""
+    with pytest.raises(SemanticsError, match="1,000,001 ticks is beyond the limit"):
+        formalize(parse("upon p the sw shall within 100.0001 seconds satisfy q"),
+                  tick_period=Fraction(1, 10_000))
 
 
 def test_r1_formulas_are_the_papers():
