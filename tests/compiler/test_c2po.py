@@ -16,7 +16,8 @@ from click.testing import CliRunner
 
 from fretc.cli import main
 from fretc.compiler.build import compile_entry
-from fretc.compiler.c2po import C2PO_KEYWORDS, emit_c2po
+from fretc.compiler import ir
+from fretc.compiler.c2po import C2PO_KEYWORDS, emit_c2po, mltl
 from fretc.compiler.codegen import build_monitor_module
 
 from _monitor_helpers import KEYS, entry, load_source
@@ -242,3 +243,19 @@ def test_safe_ros_and_what_c2po_cannot_express(tmp_path):
     assert only["test"].endswith(
         "-- not here: B: C2PO cannot express preReal (a previous value)\n")
     assert "INPUT" not in only["test"] and "PTSPEC" not in only["test"]
+
+
+@pytest.mark.tor("TOR-GEN-006")
+def test_operands_in_order_and_symbols_cut_and_told_apart():
+    """Since and trigger (which R2U2's runs cannot check: it computes them wrongly at the
+    pinned commit) and arithmetic keep their operands in order; a long name is cut to a
+    symbol of 46 characters; two names of one symbol are told apart (the mutation campaign,
+    docs/qualification/mutation.md, found these unchecked by TOR-GEN-006's tests)."""
+    names = {n: n for n in "pqxy"}
+    assert mltl(ir.S(ir.ap("p"), ir.ap("q")), names) == "(p S[0,M] q)"
+    assert mltl(ir.T(ir.ap("p"), ir.ap("q")), names) == "(p T[0,M] q)"
+    minus = ir.cmp(">", ir.arith("-", ir.var("x"), ir.var("y")), ir.num("0"))
+    assert mltl(minus, names) == "((x - y) > 0.0)"
+    texts, _ = emit_c2po([compile_entry(entry(
+        "L", f'the sw shall always satisfy {"v" * 60} & "a b" & a_b'))])
+    assert f"    L: (H[0,M] (({'v' * 46} && a_b) && a_b_2));\n" in texts["test"]
