@@ -396,10 +396,26 @@ def test_missing_topic_and_binding_are_errors_of_the_requirement(tmp_path):
     la = audit_log(_plan(tmp_path / "syn.fret"), str(path))
     v = _by_req(la)
     assert v["A4"].verdict == "error" and "/battery" in v["A4"].error
-    assert v["A1"].verdict == "satisfied"
+    # an error counts no tick evaluated and no unknown tick, whatever the others read
+    assert v["A4"].ticks_evaluated == 0 and v["A4"].unknown_ticks == 0
+    assert v["A1"].verdict == "satisfied" and v["A1"].unknown_ticks == 0
     (tmp_path / "syn.bindings.toml").write_text(SYN_BINDINGS)
     la = audit_log(_plan(tmp_path / "syn.fret"), str(path))
     assert "no binding for 'battery'" in _by_req(la)["A4"].error
+
+
+@pytest.mark.tor("TOR-VER-006")
+def test_the_summary_counts_partial_logs_and_log_errors(tmp_path):
+    """The summary's counts beside its exit code: a complete log, a partial one and one that
+    could not be read, each counted once."""
+    from fretc.audit.verdict import LogAudit, summary
+
+    logs = [LogAudit("a.mcap"), LogAudit("b.mcap", partial=True),
+            LogAudit("c.mcap", error="not a log"), LogAudit("d.mcap", partial=True)]
+    out = summary(logs)
+    assert (out["partial_logs"], out["log_errors"]) == (2, 1), out
+    assert out["exit_code"] == 2, out
+    assert summary(logs[:1])["partial_logs"] == summary(logs[:1])["log_errors"] == 0
 
 
 def test_tick_period_mismatch_is_an_input_error(tmp_path):
