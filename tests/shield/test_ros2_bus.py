@@ -5,7 +5,10 @@ controller proposing 0.3 m/s at 10 Hz and a rclpy LiDAR (an obstacle at 0.5 m fr
 (tests/shield/_bus_peers.py):
 
 * the first stopped command within 1 s of the first near scan (R2);
-* no forward command while the obstacle is near (R9: within 0.55 m ahead);
+* no forward command while the obstacle is near (R9: within 0.55 m ahead), from the node's
+  reaction allowance after the first near scan on: a proposal that reaches the node before
+  its tick reads that scan is answered with the tick before's state (docs/guide/shield.md,
+  "The bus allowance": one tick and the latency budget, 120 ms);
 * the stop request within 0.8 s of the LiDAR's last scan (R6: stale after 0.3 s, then
   0.5 s);
 * no non-zero command while the last stop request received is true (R3).
@@ -37,6 +40,8 @@ pytestmark = pytest.mark.xdist_group("ros2")
 REPO = Path(__file__).resolve().parents[2]
 PEERS = str(Path(__file__).with_name("_bus_peers.py"))
 MS = 1_000_000
+#: the node's reaction allowance: a tick (100 ms) and its latency budget (20 ms)
+ALLOWANCE_NS = 120 * MS
 
 
 def _package(tmp_path: Path) -> Path:
@@ -65,7 +70,8 @@ def _checks(rows: list[dict]) -> dict[str, object]:
     cmds = [r for r in rows if r["topic"] == "/cmd_vel_filtered"]
     stops = [r["t"] for r in cmds if r["t"] > first_near
              and abs(r["x"]) < 1e-3 and abs(r["z"]) < 1e-3]
-    forward = [r for r in cmds if first_near < r["t"] < near_end and r["x"] > 0]
+    forward = [r for r in cmds if first_near + ALLOWANCE_NS < r["t"] < near_end
+               and r["x"] > 0]
     requests = [r["t"] for r in rows if r["topic"] == "/gwendolen_control"
                 and r["data"] and r["t"] > last_scan]
     moving_while_stopped, stop = [], None
