@@ -86,6 +86,9 @@ class CheckResult:
     unknown_queries: int = 0
     smt_queries: int = 0
     monitor_queries: int = 0
+    #: why the set was not checked at all ("" when it was: a FRET component whose
+    #: requirements have no tick period for their durations)
+    not_checked: str = ""
 
     @property
     def exit_code(self) -> int:
@@ -95,7 +98,7 @@ class CheckResult:
         output: a finding of severity ``input``)."""
         if self.input_errors or any(f.severity == "input" for f in self.findings):
             return 2
-        if any(f.severity in ("error", "unknown") for f in self.findings):
+        if self.not_checked or any(f.severity in ("error", "unknown") for f in self.findings):
             return 1
         return 0
 

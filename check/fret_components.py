@@ -26,11 +26,15 @@ def component_row(name: str, ids: list[str], result: CheckResult) -> dict[str, A
     "reason", "exit_code"}``. ``realizability`` is ``"realizable"`` (every group decided
     realizable), ``"unrealizable"`` (a group is; ``conflicts`` the minimal unrealizable
     subsets found, else the group's ids), ``"unknown"`` (a group past its budget; ``reason``
-    the finding's words) or ``"not checked"`` (the component declares no Input or Output, or
-    a variable of a group is declared neither: ``reason`` says which)."""
+    the finding's words) or ``"not checked"`` (the component declares no Input or Output, a
+    variable of a group is declared neither, or ``result.not_checked``: ``reason`` says
+    which)."""
     row: dict[str, Any] = {"component": name, "requirements": ids, "conflicts": [],
                            "reason": "", "exit_code": result.exit_code}
     rz = result.realizability
+    if result.not_checked:
+        row.update(realizability="not checked", reason=result.not_checked)
+        return row
     if rz is None:
         row.update(realizability="not checked",
                    reason="the component declares no Input or Output variable")

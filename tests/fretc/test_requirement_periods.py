@@ -138,3 +138,39 @@ def test_testgen_writes_the_bindings_period(tmp_path):
     text = (out / "tests.json").read_text(encoding="utf-8")
     assert json.loads(text)["tests"] and "within 10 ticks" in text, text[:2000]
     assert "within 1 ticks" not in text and "within 1 tick " not in text
+
+
+def _two_components(tmp_path: Path) -> str:
+    """A FRET export of two components: ``ctrl``'s pair conflicts, ``mon`` counts seconds."""
+    def var(comp: str, name: str, kind: str) -> dict:
+        return {"component_name": comp, "variable_name": name, "idType": kind,
+                "dataType": "boolean"}
+    doc = {"requirements": [
+        {"reqid": "C1", "fulltext": "whenever a ctrl shall immediately satisfy o"},
+        {"reqid": "C2", "fulltext": "whenever a ctrl shall immediately satisfy !o"},
+        {"reqid": "M1", "fulltext": "upon b mon shall within 2 seconds satisfy w"}],
+        "variables": [var("ctrl", "a", "Input"), var("ctrl", "o", "Output"),
+                      var("mon", "b", "Input"), var("mon", "w", "Output")]}
+    path = tmp_path / "p.json"
+    path.write_text(json.dumps(doc), encoding="utf-8")
+    return str(path)
+
+
+def test_a_component_with_no_period_is_not_checked_and_the_others_are(tmp_path):
+    """A FRET project: the component whose durations have no period is 'not checked' (its
+    row says why, the error on stderr), the others are checked, and the run exits with the
+    worst of them (1), not as an input error (2); alone (``--component``) it stays 2."""
+    export, out = _two_components(tmp_path), tmp_path / "check.json"
+    got = CliRunner().invoke(main, ["check", export, "--no-redundancy", "-o", str(out)])
+    assert got.exit_code == 1, got.output
+    rows = {r["component"]: r for r in json.loads(out.read_text())["fret_components"]}
+    assert rows["ctrl"]["realizability"] == "unrealizable"
+    assert rows["mon"]["realizability"] == "not checked"
+    assert "M1: '2 seconds' is a duration in time units and no tick period is known" in \
+        rows["mon"]["reason"]
+    assert "error: " in got.output and "M1: '2 seconds'" in got.output
+    given = _run("check", export, "--no-redundancy", "--tick-period", "1s", "--json")
+    rows = {r["component"]: r for r in json.loads(given.output)["fret_components"]}
+    assert rows["mon"]["realizability"] == "realizable", rows["mon"]
+    alone = _run("check", export, "--component", "mon")
+    assert alone.exit_code == 2 and "no tick period is known" in alone.output

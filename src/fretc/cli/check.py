@@ -191,13 +191,18 @@ def check_cmd(files: tuple[str, ...], inputs: str | None, outputs: str | None,
                                [("--witness-dir", witness_dir)], req_folders)
     rs = requirement_set(files, bindings_file, component=component, only=only,
                          exclude=exclude, tick_period=tick_period, stream_use=STREAM_USE,
-                         bits=True)
+                         bits=True, defer_periods=component is None and inputs is None
+                         and outputs is None)
     ins, outs = names_of(inputs), names_of(outputs)
     settings = _Settings(Budget(budget, memory_budget, query_cpu), mus_budget,
                          not no_redundancy, engine,
                          None if timeout is None else time.monotonic() + timeout,
                          _CheckProgress() if not no_progress and sys.stderr.isatty() else None)
     parts = rs.by_component() if component is None and ins is None and outs is None else []
+    if rs.period_errors and not parts:  # (not a FRET project: no period is an input error)
+        from fretc.common.errors import InputError
+
+        raise InputError("\n".join(rs.period_errors.values()))
     try:
         if parts:  # (a FRET project: FRET's table, a check per component)
             _check_project(parts, settings, witness_dir, as_json, output)
@@ -269,13 +274,19 @@ def _check_project(parts: list[tuple[str, Any]], settings: _Settings, witness_di
     Witnesses go to ``witness_dir/COMPONENT``."""
     import os
 
+    from fretc.check.findings import CheckResult
     from fretc.check.fret_components import project_json, table_text
 
     done = []
     stems = file_stems([name for name, _part in parts])
     for name, part in parts:
         wdir = None if witness_dir is None else os.path.join(witness_dir, stems[name])
-        result = _checked(part, part.inputs, part.outputs, settings, wdir)
+        if part.period_errors:  # (not checked, the others are: its row says why)
+            for why in part.period_errors.values():
+                click.echo(shown(f"error: {why}"), err=True)
+            result = CheckResult(not_checked="; ".join(part.period_errors.values()))
+        else:
+            result = _checked(part, part.inputs, part.outputs, settings, wdir)
         done.append((name, [e.id for e in part.entries], result))
     doc = project_json(done)
     if output:

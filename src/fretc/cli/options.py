@@ -508,6 +508,9 @@ class RequirementSet:
         #: (:func:`fretc.fretish.fret_variables.unused`; "" a free variable)
         self.stream_use = stream_use
         self.component = component
+        #: per requirement id, why it has no tick period (``defer_periods`` of
+        #: :func:`requirement_set`): its FRET component is then not checked
+        self.period_errors: dict[str, str] = {}
         self._own = entries
         if component is not None:  # (its declarations: every requirement's, selected or not)
             self._own = _of_component(every if every is not None else entries, component)
@@ -532,9 +535,12 @@ class RequirementSet:
             own = [e for e in self.entries if e.requirement.component == name]
             notes = fret_declarations([written[e.id] for e in own],
                                       stream_use=self.stream_use, bits=self.bits)[1]
-            out.append((name, RequirementSet(self.as_written, own, notes, self.bindings, name,
-                                             _of_component(self.as_written, name),
-                                             self.stream_use, self.bits)))
+            part = RequirementSet(self.as_written, own, notes, self.bindings, name,
+                                  _of_component(self.as_written, name), self.stream_use,
+                                  self.bits)
+            part.period_errors = {e.id: self.period_errors[e.id] for e in own
+                                  if e.id in self.period_errors}
+            out.append((name, part))
         return out
 
     @property
@@ -621,7 +627,7 @@ def requirement_set(files: Sequence[str], bindings_file: str | None, *,
                     component: str | None = None, only: str | None = None,
                     exclude: str | None = None,
                     tick_period: str | None = None, stream_use: str = "",
-                    bits: bool = False) -> RequirementSet:
+                    bits: bool = False, defer_periods: bool = False) -> RequirementSet:
     """Read requirement ``files`` (any format :func:`fretc.fretish.files.load_requirements`
     reads) with the ``-b`` binding file: each requirement's tick period is ``tick_period``
     (``--tick-period``, every requirement's, as in ``fretc audit``), else its file's
@@ -635,6 +641,9 @@ def requirement_set(files: Sequence[str], bindings_file: str | None, *,
     how the command reads a FRET stream variable, :func:`fretc.fretish.fret_variables.unused`;
     ``bits``: a boolean stream of booleans read by its state bit, ``fretc check``'s and
     ``fretc shield``'s reading, :func:`fretc.fretish.fret_variables.with_fret_definitions`).
+    ``defer_periods``: a requirement with no period known is kept, its error in
+    :attr:`RequirementSet.period_errors` (``fretc check`` on a FRET project: that component
+    not checked, the others checked).
 
     Raises:
         FretcError: a file or binding file that cannot be read, no period known for a
@@ -668,11 +677,36 @@ def requirement_set(files: Sequence[str], bindings_file: str | None, *,
     elif override is None and any(e.tick_period is None and time_unit_duration(e)
                                   for e in entries):
         bindings, found = _beside(files)
-    entries = with_periods(entries, bindings, found, override)
+    errors: dict[str, str] = {}
+    try:
+        entries = with_periods(entries, bindings, found, override)
+    except InputError:
+        if not defer_periods:
+            raise
+        entries, errors = _periods_each(entries, bindings, found)
     if bindings_file is None:
         bindings = None  # (found beside: its period only)
-    return RequirementSet(as_written, entries, notes, bindings, component, every, stream_use,
-                          bits)
+    rs = RequirementSet(as_written, entries, notes, bindings, component, every, stream_use,
+                        bits)
+    rs.period_errors = errors
+    return rs
+
+
+def _periods_each(entries: list[Any], bindings: Any,
+                  found: str) -> tuple[list[Any], dict[str, str]]:
+    """``entries`` each with its tick period as :func:`with_periods` gives it, one at a
+    time: those it refuses kept as they are, ``{id: its error}`` beside them."""
+    from fretc.common.errors import InputError
+    from fretc.signals.bindings.periods import with_periods
+
+    out, errors = [], {}
+    for e in entries:
+        try:
+            [e] = with_periods([e], bindings, found)
+        except InputError as exc:
+            errors[e.id] = str(exc)
+        out.append(e)
+    return out, errors
 
 
 def period_option_value(tick_period: str | None) -> Any:
