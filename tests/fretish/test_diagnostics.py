@@ -88,12 +88,14 @@ def test_hint_missing_shall():
     assert e.column == 15 and "shall" in e.hint
 
 
+@pytest.mark.tor("TOR-GRM-002")
 def test_hint_probability():
     e = error_of("the sw shall with probability >= 1.5 always satisfy q", line=2, column=4)
     assert (e.line, e.column) == (2, 4 + 33) and "outside [0, 1]" in e.message
     assert "[0, 1]" in e.hint
 
 
+@pytest.mark.tor("TOR-GRM-002")
 def test_errors_on_later_lines():
     e = error_of("the sw shall\n   always satisfy p\n   & & q", source="x.fret", line=10,
                  column=20)

@@ -224,6 +224,7 @@ def test_trace_verdict_sentences():
     ("after m", "after"), ("after mode m", "after"), ("after m mode", "after"),
     ("before m", "before"), ("only after m", "onlyAfter"), ("only before m", "onlyBefore"),
 ])
+@pytest.mark.tor("TOR-GRM-001")
 def test_scope_modes(phrase, kind):
     for sep in (" ", ", "):
         r = parse(f"{phrase}{sep}the sw shall always satisfy q")
@@ -236,12 +237,14 @@ def test_scope_modes(phrase, kind):
     ("after x > 3", "after"), ("before x > 3", "before"), ("only after x > 3", "onlyAfter"),
     ("only before x > 3", "onlyBefore"),
 ])
+@pytest.mark.tor("TOR-GRM-001")
 def test_scope_conditions(phrase, kind):
     r = parse(f"{phrase} the sw shall always satisfy q")
     assert r.scope.kind == kind
     assert r.scope.mode == A.Binary(">", A.Var("x"), A.NumLit("3"))
 
 
+@pytest.mark.tor("TOR-GRM-001")
 def test_quoted_mode_and_scope_span():
     r = parse('in "flight mode" mode, the sw shall always satisfy q')
     assert r.scope.mode == A.Var("flight mode")
@@ -273,6 +276,7 @@ def test_is_true_after_a_scope_is_rejected():
     ("UPON x > 2 IS True", "(x > 2)", "regular", [("upon", None)]),
     ("upon if a then b", "(a -> b)", "regular", [("upon", None)]),
 ])
+@pytest.mark.tor("TOR-GRM-001")
 def test_conditions(cond, expr, kind, parts):
     r = parse(f"{cond} the sw shall always satisfy q")
     assert r.condition.kind == kind
@@ -285,6 +289,7 @@ def test_condition_after_scope_with_and():
     assert (r.scope.kind, r.condition.kind, r.condition.expr) == ("in", "regular", A.Var("p"))
 
 
+@pytest.mark.tor("TOR-GRM-001")
 def test_condition_spans():
     text = "upon p is false, or when r the sw shall always satisfy q"
     r = parse(text)
@@ -301,6 +306,7 @@ def test_condition_spans():
     ("at the last timepoint", "finally"), ("eventually", "eventually"),
     ("always", "always"), ("never", "never"),
 ])
+@pytest.mark.tor("TOR-GRM-001")
 def test_simple_timings(phrase, kind):
     r = parse(f"the sw shall {phrase} satisfy q")
     assert r.timing.kind == kind and r.timing.phrase == phrase
@@ -322,6 +328,7 @@ def test_timing_phrase_is_normalized():
     ("minutes", "minutes"), ("hour", "hours"), ("HOURS", "hours"),
 ])
 @pytest.mark.parametrize("word", ["within", "for", "after"])
+@pytest.mark.tor("TOR-GRM-001")
 def test_duration_timings(word, unit, canon):
     r = parse(f"the sw shall {word} 2.5 {unit} satisfy q")
     assert r.timing == A.Timing(word, duration=A.Duration("2.5", canon), phrase=word)
@@ -337,6 +344,7 @@ def test_bad_durations(text):
     error_of(text)
 
 
+@pytest.mark.tor("TOR-GRM-001")
 def test_stop_timings():
     r = parse("the sw shall until stop | halt satisfy post")
     assert r.timing == A.Timing("until", stop=A.Binary("|", A.Var("stop"), A.Var("halt")),
@@ -346,6 +354,7 @@ def test_stop_timings():
 
 
 @pytest.mark.parametrize("op", ["<", "<=", ">", ">=", "=", "!="])
+@pytest.mark.tor("TOR-GRM-001")
 def test_probability(op):  # '!=' as FRET 3.1 accepts it
     r = parse(f"the sw shall, with probability {op} 0.99, always satisfy q")
     assert r.probability == A.Probability(op, "0.99")
@@ -353,6 +362,7 @@ def test_probability(op):  # '!=' as FRET 3.1 accepts it
 
 
 @pytest.mark.parametrize("bound", ["> 1", ">= 1.5", "< 0", "= -0.5", "<= 2", "!= 1.5"])
+@pytest.mark.tor("TOR-GRM-001")
 def test_probability_out_of_range(bound):
     e = error_of(f"the sw shall with probability {bound} always satisfy q")
     assert e.hint and "with probability >= 0.99" in e.hint
@@ -360,10 +370,12 @@ def test_probability_out_of_range(bound):
 
 
 @pytest.mark.parametrize("bound", [">= 1", "<= 0", "> 0", "< 1", "= 1", "= 0", "> 1e-3"])
+@pytest.mark.tor("TOR-GRM-001")
 def test_probability_edges(bound):
     assert parse(f"the sw shall with probability {bound} satisfy q").probability is not None
 
 
+@pytest.mark.tor("TOR-GRM-001")
 def test_component_forms():
     for text, comp in [("the sw shall satisfy p", "sw"), ("sw shall satisfy p", "sw"),
                        ("shall the sw satisfy p", "sw"), ("shall sw satisfy p", "sw"),
