@@ -77,6 +77,7 @@ def test_precedence_table(text, expected):
     "p and q", "p or q", "not p", "x == 3", ".5", "f(a,)", "(a", "a)", "a &", "3x",
     "x = y z", "at the next occurrence of p", "X", "next", "the",
 ])
+@pytest.mark.tor("TOR-GRM-002")
 def test_bad_expressions(text):
     with pytest.raises(FretishSyntaxError):
         parse_expression(text)
@@ -96,6 +97,7 @@ def test_bad_expressions(text):
     ("-!y ^ 2", 2, "unexpected '!' in an expression"),
     ("- -!y", 4, "unexpected '!' in an expression"),
 ])
+@pytest.mark.tor("TOR-GRM-002")
 def test_where_expression_errors_are_reported(text, column, message):
     with pytest.raises(FretishSyntaxError) as info:
         parse_expression(text)
