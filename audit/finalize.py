@@ -20,7 +20,7 @@ import numpy as np
 
 from fretc.signals.bindings import Bindings
 from fretc.signals.clock import unsampled_of
-from fretc.audit.damage import open_obligations, verdict_at_damage
+from fretc.audit.damage import OpenObligation, open_obligations, verdict_at_damage
 from fretc.monitors.interval import OBLIGATIONS, Evidence, EvidenceUnsupported
 from fretc.monitors.judge import judge, nan_ticks
 from fretc.monitors.unknowns import Unknowns
@@ -176,7 +176,8 @@ def _verdict(plan: AuditPlan, r: RequirementPlan, res: ClockPass, bindings: Bind
 def judged(plan: AuditPlan, r: RequirementPlan, v: Verdict, ticks: StreamTicks,
            ev: Evidence, ltl3: tuple[str, int | None, int | None],
            rob: tuple[float, int, int, list[tuple[int, int, float]]],
-           held: int | None | str = "row", at_cut: bool = False) -> None:
+           held: int | None | str = "row", at_cut: bool = False,
+           opened: list[OpenObligation] | None = None) -> None:
     """Set the verdict ``v`` of ``r`` as :func:`finalize` sets it on a trace without
     unknown ticks or damage, from what was decided over its ``ticks.n`` ticks without
     their columns (:mod:`fretc.audit.streamed`): the interval semantics' evidence ``ev``,
@@ -185,16 +186,16 @@ def judged(plan: AuditPlan, r: RequirementPlan, v: Verdict, ticks: StreamTicks,
     (``v.values``, ``v.sources``) are the caller's: at :func:`shown_ticks`. ``held``: the
     log time (ns) of the message held at the robustness's tick (None: none); ``"row"``, a
     CSV trace's: the tick's own time when not negative. ``at_cut``: the trace ends at a
-    cut, the verdict the one its ticks decide (:func:`fretc.audit.damage.verdict_at_damage`,
-    no obligation open at the cut: :func:`fretc.audit.streamed.decided_at_cut`)."""
+    cut, the verdict the one its ticks decide (:func:`fretc.audit.damage.verdict_at_damage`;
+    ``opened`` the obligations open at the cut)."""
     v.engine = "interval"
     v.intervals, v.triggers, v.violations = ev.intervals, ev.triggers, ev.violations
     status, tick, time = ltl3
     v.ltl3 = Ltl3(status, tick, time)
     holds = ev.holds
     if at_cut:
-        word, why = verdict_at_damage(holds, ev.vacuous, status, tick, ticks.n, ev, [],
-                                      has_ltl3=not r.offline)
+        word, why = verdict_at_damage(holds, ev.vacuous, status, tick, ticks.n, ev,
+                                      opened or [], has_ltl3=not r.offline)
         if word == "unknown":
             v.verdict, v.unknown_reason = "unknown", why
             return

@@ -7,7 +7,7 @@ semantics, the pt formula's robustness, the LTL3 verdict), each the exact counte
 part of the whole-trace judge, and the verdict is set by the same code as the whole-trace
 audit's (:func:`fretc.audit.finalize.judged`): the audit JSON is the same byte for byte
 (``tests/audit/test_streamed.py``). What is judged whole or three-valued instead
-(:func:`unstreamed_reason`, :func:`decided_at_cut`, :data:`NAN_REASON`,
+(:func:`unstreamed_reason`, :data:`NAN_REASON`,
 :data:`UNKNOWN_CELLS`, :data:`GAP_ROW`), the reads again and the memory: ARCHITECTURE.md
 ("CSV traces, streamed").
 """
@@ -22,6 +22,7 @@ import numpy as np
 
 from fretc.fretish import ast as A
 from fretc.logs import CsvSource
+from fretc.audit.damage import OpenObligation
 from fretc.monitors.expressions import EvidenceUnsupported
 from fretc.monitors.interval import Evidence
 from fretc.monitors.interval import IntervalStream, stream_unsupported
@@ -44,7 +45,7 @@ GAP_ROW = "a gap row"
 
 __all__ = ["ENABLED", "NAN_REASON", "UNKNOWN_CELLS", "GAP_ROW", "StreamedResult", "CsvStreams",
            "unstreamed_reason", "values_around", "RequirementStreams", "streams_of",
-           "feed_streams", "decided_at_cut"]
+           "feed_streams"]
 
 #: Whether CSV traces are judged while read (tests set it False to compare the two judges).
 ENABLED = True
@@ -70,8 +71,10 @@ class StreamedResult:
     n: int
     last_time: int
     #: the trace ends at a ``cut`` row: the verdict is the one its intact rows decide
-    #: (:func:`fretc.audit.damage.verdict_at_damage`; :func:`decided_at_cut`)
+    #: (:func:`fretc.audit.damage.verdict_at_damage`)
     cut: bool = False
+    #: at a cut: the obligations open there (:func:`fretc.audit.damage.open_obligations`)
+    opened: list[OpenObligation] = field(default_factory=list)
 
 
 @dataclass
@@ -202,10 +205,8 @@ class CsvStreams:
             if why is None and self.n == 0:
                 why = "no row"
             if why == "a cut row" and not unknown and self.n:
-                got = self._at_cut(s)
-                if got is not None:
-                    self.results[i] = got
-                    continue
+                self.results[i] = self._at_cut(s)
+                continue
             if why is not None:
                 self.whole[i] = why
                 if s.nan_range is not None:
@@ -219,35 +220,16 @@ class CsvStreams:
                                              s.rob.finish(), self.n, self.last_time)
         self.streams = []
 
-    def _at_cut(self, s: RequirementStreams) -> StreamedResult | None:
-        """What the streams of ``s`` decided over the rows before a ``cut`` row, when that
-        is the verdict at the cut (:func:`decided_at_cut`), else None."""
+    def _at_cut(self, s: RequirementStreams) -> StreamedResult:
+        """What the streams of ``s`` decided over the rows before a ``cut`` row, with the
+        obligations open at the cut."""
         assert self.last_time is not None  # (n rows)
         ev, times = s.interval.finish()
         ltl3 = s.ltl3.finish() if s.ltl3 is not None else ("unknown", None, None)
-        if not decided_at_cut(s.r, ev, ltl3, self.n):
-            return None
+        opened = [OpenObligation(t, interval, why)
+                  for t, interval, why in s.interval.open_at_end()]
         return StreamedResult(ev, times, ltl3, s.rob.finish(), self.n, self.last_time,
-                              cut=True)
-
-
-def decided_at_cut(r: RequirementPlan, ev: Evidence,
-                   ltl3: tuple[str, int | None, int | None], n: int) -> bool:
-    """Whether the verdict of ``r`` at a cut after ``n`` ticks follows from its interval
-    evidence ``ev`` and LTL3 verdict ``ltl3`` alone (:func:`fretc.audit.damage.
-    verdict_at_damage` reads the obligations open at the cut only for a verdict that holds
-    and is not definite, and none is ever open for an ``immediately`` timing or a plain
-    ``always``/``never``: :func:`fretc.audit.damage.open_obligations`)."""
-    status, tick, _time = ltl3
-    definite = not r.offline and (
-        status == "satisfied" or (status == "violated" and tick is not None and tick < n))
-    if not ev.holds or definite:
-        return True
-    req = r.requirement
-    assert req is not None  # (streamed: parsed)
-    kind = "eventually" if req.timing.kind == "null" else req.timing.kind
-    return kind == "immediately" or (kind in ("always", "never")
-                                     and not req.scope.kind.startswith("only"))
+                              cut=True, opened=opened)
 
 
 def feed_streams(s: RequirementStreams, columns: Mapping[str, np.ndarray], k: int,

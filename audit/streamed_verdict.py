@@ -35,7 +35,8 @@ def finalize_streamed(plan: AuditPlan, r: RequirementPlan, got: StreamedResult,
     rob = got.robustness
     status, tick, time = got.ltl3
     judged(plan, r, v, ticks, got.evidence, (status, tick, time),
-           (rob.value, rob.tick, rob.tick_time, rob.points), at_cut=got.cut)
+           (rob.value, rob.tick, rob.tick_time, rob.points), at_cut=got.cut,
+           opened=got.opened)
     return v.verdict == "violated"
 
 

@@ -14,9 +14,8 @@ from dataclasses import dataclass
 from fretc.fretish import ast as A
 from fretc.monitors.interval import Violation, every_trigger
 from fretc.monitors.unknowns import Unknowns, possible_trigger
-from fretc.monitors.obligations import FirstEvents
+from fretc.monitors.obligations import FirstEvents, open_reason
 
-from fretc.audit.damage import open_reason
 
 if TYPE_CHECKING:
     import numpy as np

@@ -27,7 +27,7 @@ from fretc.fretish.fret_since import SINCE
 from fretc.monitors.evidence import MAX_LISTED, Evidence, Violation
 from fretc.monitors.expressions import ColumnExpressions, EvidenceUnsupported
 from fretc.monitors.interval_fates import BOUNDED, NONE, Bounded, Chunk, Group, Ledger
-from fretc.monitors.obligations import OBLIGATIONS, Interval
+from fretc.monitors.obligations import OBLIGATIONS, Interval, OneTrigger, open_reason
 
 __all__ = ["EvidenceUnsupported", "Violation", "Evidence", "MAX_LISTED", "IntervalStream",
            "evaluate_requirement", "verdict_of", "every_trigger", "Triggered", "duration_of",
@@ -341,6 +341,8 @@ class IntervalStream:
         self._last_time = 0
         self._last_R = False
         self._result: tuple[Evidence, dict[int, int]] | None = None
+        #: at :meth:`finish`: the open interval's start and its waiting triggers
+        self._waiting: tuple[int, list[tuple[int, int | None]]] | None = None
         self._record: tuple[list[np.ndarray], list[np.ndarray], list[np.ndarray]] | None = (
             ([], [], []) if record else None)
         #: called with each chunk's trigger points (the trace's tick of the chunk's first,
@@ -474,10 +476,33 @@ class IntervalStream:
         if self.n < 1:
             raise ValueError("the interval semantics needs at least one tick")
         if self._in:  # close the open interval at the last tick
+            if self._ledger.open is not None:
+                self._waiting = (self._ledger.open[0], self._obligation.pending())
             none = np.zeros(1, np.bool_)
             self._step(none, none, None, none, np.zeros(1, np.int64), final=True)
         self._result = self._ledger.evidence(self.n)
         return self._result
+
+    def open_at_end(self, limit: int = 1) -> list[tuple[int, Interval, str]]:
+        """After :meth:`finish`: the first ``limit`` triggers whose obligation the ticks fed
+        neither meet nor miss, as ``(t, (s, e), why)`` (``(s, e)`` the scope interval open at
+        the last tick ``e``; ``why`` :func:`fretc.monitors.obligations.open_reason`'s
+        words): the obligations a damage after the last tick leaves open."""
+        assert self._result is not None  # (finished)
+        if self._waiting is None:
+            return []
+        s, e = self._waiting[0], self.n - 1
+        timing, negate = self._req.timing.kind, self._req.scope.kind.startswith("only")
+        k = self._ledger.k
+        out = []
+        for t, first in self._waiting[1]:
+            why = open_reason(timing, negate, t, e, k,
+                              OneTrigger(t, e + 1 if first is None else first))
+            if why is not None:
+                out.append((t, (s, e), why))
+                if len(out) >= limit:
+                    break
+        return out
 
     @property
     def intervals(self) -> list[Interval]:

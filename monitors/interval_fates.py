@@ -117,6 +117,11 @@ class Bounded:
             self.settle = -1
         self.waiting = np.zeros((0, 4), np.int64)
 
+    def pending(self) -> list[tuple[int, int | None]]:
+        """The triggers still waiting, ascending: ``(t, first event at or after it)``, the
+        event None when not seen yet."""
+        return [(t, None if nx >= _INF else nx) for t, _tt, nx, _nxt in self.waiting.tolist()]
+
     def _event(self, R: np.ndarray) -> np.ndarray:
         """Where the timing's event holds: ``R != want`` (``immediately``, ``next``), ``!R``
         (``for``) or ``R`` (``within``, ``after``)."""
@@ -226,6 +231,11 @@ class Group:
         self.resolves = self.kind in ("until", "before")
         self.count = 0
         self.ticks = np.zeros((0, 2), np.int64)  # the first ``limit``: (tick, time)
+
+    def pending(self) -> list[tuple[int, int | None]]:
+        """The first waiting triggers (the group's, at most ``limit``), ascending, as
+        ``(t, None)``: no event of the group seen since (it would have decided them)."""
+        return [(t, None) for t in self.ticks[:, 0].tolist()] if self.count else []
 
     def _events(self, R: np.ndarray, S: np.ndarray | None
                 ) -> tuple[np.ndarray | None, np.ndarray | None]:

@@ -12,7 +12,7 @@ import functools
 
 import numpy as np
 
-__all__ = ["OBLIGATIONS", "FirstEvents", "Interval"]
+__all__ = ["OBLIGATIONS", "FirstEvents", "OneTrigger", "Interval", "open_reason"]
 
 Interval = tuple[int, int]
 
@@ -95,3 +95,100 @@ class FirstEvents:
     def nS(self) -> _Ints | None:
         """The first tick at or after each where S holds (n where none); None without S."""
         return _Ints(_next_true(self._S)) if self._S is not None else None
+
+
+class OneTrigger:
+    """What :func:`open_reason` asks of one trigger, from a stream that kept it waiting
+    (:meth:`fretc.monitors.interval.IntervalStream.open_at_end`): ``first`` the first tick
+    at or after it where its timing's event held (the one event a waiting trigger's rule
+    reads), past the last tick where none did; every question gets that answer."""
+
+    def __init__(self, t: int, first: int) -> None:
+        self._t, self._first = t, first
+
+    def __getitem__(self, i: int) -> int:
+        assert i == self._t  # (asked of its trigger only)
+        return self._first
+
+    @property
+    def nR(self) -> OneTrigger:
+        """The answer for R."""
+        return self
+
+    @property
+    def nNR(self) -> OneTrigger:
+        """The answer for !R."""
+        return self
+
+    @property
+    def nS(self) -> OneTrigger:
+        """The answer for the stop condition."""
+        return self
+
+
+def open_reason(timing: str, negate: bool, t: int, e: int, k: int,
+                chk: FirstEvents | OneTrigger) -> str | None:
+    """Why the obligation of the trigger ``t`` is still open at ``e``, the last tick read
+    (its interval reaching it), or None when the ticks up to ``e`` meet or miss it: the rule
+    of :func:`fretc.audit.damage.open_obligations` for one trigger (``chk`` over those
+    ticks, or :class:`OneTrigger`; ``k`` the duration in ticks or 0, ``negate`` an only*
+    scope)."""
+    want = not negate
+    nWant, nUnwant = (chk.nR, chk.nNR) if want else (chk.nNR, chk.nR)
+    kind = "eventually" if timing == "null" else timing
+    return _open(kind, negate, want, t, e, k, chk, nWant, nUnwant)
+
+
+def _open(kind: str, negate: bool, want: bool, t: int, e: int, k: int,
+          chk: FirstEvents | OneTrigger, nWant, nUnwant) -> str | None:
+    """Why the obligation of trigger ``t`` is open at the end ``e`` of the intact span, or
+    None when it is met or missed already (FRET's obligations, :data:`OBLIGATIONS`)."""
+    rname = "R" if want else "!R"
+    if kind == "immediately":
+        return None
+    if kind == "next":
+        return f"{rname} at t+1={t + 1}, past the damage" if t == e else None
+    if kind == "finally":
+        return f"{rname} at the end of the scope interval, which the damage hides"
+    if kind == "eventually":
+        if not negate and nWant[t] > e:
+            return f"R has not held since the trigger t={t}"
+        return None
+    if kind in ("always", "never"):
+        if negate:  # "!name somewhere in [t, e]" not found yet
+            bad = (chk.nNR if kind == "always" else chk.nR)[t]
+            return f"the only* obligation of t={t} is not met yet" if bad > e else None
+        return None  # an invariant that held so far holds over the intact span
+    if kind == "within":
+        if e >= t + k:
+            return None
+        if not negate:
+            return f"R not yet held in [{t}, {t + k}], whose end lies past the damage" \
+                if nWant[t] > e else None
+        return (f"!R must hold on [{t}, {t + k}], whose end lies past the damage"
+                if nUnwant[t] > e else None)
+    if kind == "for":
+        if e >= t + k:
+            return None
+        if not negate:
+            return (f"R must hold on [{t}, {t + k}], whose end lies past the damage"
+                    if nUnwant[t] > e else None)
+        return (f"!R not yet held in [{t}, {t + k}], whose end lies past the damage"
+                if chk.nNR[t] > e else None)
+    if kind == "after":
+        if e >= t + k + 1:
+            return None
+        if chk.nR[t] <= e:  # R already held early: met (negated) or missed (plain)
+            return None
+        return f"R at t+k+1={t + k + 1}, past the damage"
+    if kind in ("until", "before"):
+        nS = chk.nS
+        assert nS is not None  # (until and before have a stop condition)
+        if (kind == "until") == want:
+            if nS[t] > e and nUnwant[t] > e:
+                return f"{rname} held from t={t} but the stop condition has not come yet"
+            return None
+        if nWant[t] > e and nS[t] > e:
+            return f"neither {rname} nor the stop condition has held since t={t}"
+        return None
+    return None

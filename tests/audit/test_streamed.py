@@ -182,9 +182,10 @@ def check_trace(tmp_path_factory, n: int, timed: bool, marks: str, rows: int, ch
     assert got == whole
     streamed_ids = _ids(plan, decided["results"])
     assert not streamed_ids & WHOLE
-    if marks in ("", "nan", "unknown", "both", "gap") and chunk >= 3:
-        # a clean trace, or one whose NaN, unknown cells and gap rows the three-valued
-        # streams take (a gap row as a gap tick, one tick or more): every requirement but
+    if marks in ("", "nan", "unknown", "both", "gap", "cut") and chunk >= 3:
+        # a clean trace, one cut at its end, or one whose NaN, unknown cells and gap rows
+        # the three-valued streams take (a gap row as a gap tick, one tick or more): every
+        # requirement but
         # WHOLE streamed (a robustness chunk shorter than a bounded window, R14's 3 ticks,
         # is refused)
         assert streamed_ids == {r.id for r in plan.requirements} - WHOLE, decided["whole"]
@@ -195,10 +196,9 @@ def test_what_sends_a_requirement_back_to_the_whole_trace_judge(plan, tmp_path):
     """A NaN read by a comparison sends the requirements comparing ``x`` (only them) to the
     three-valued streams (audit/streamed_three.py), which decide them here, an ``unknown``
     cell those reading its column, and a ``gap`` row (one tick or more) every one; a ``cut``
-    row sends back to the whole-trace judge those whose verdict at the cut may read an
-    obligation still open there (KP-001: one that holds, its LTL3 verdict not definite, with
-    a timing other than ``immediately`` or a plain ``always``/``never``), the streams
-    deciding the others. The JSON is the whole-trace judge's in each case."""
+    row none: the streams decide every one, an obligation still open at the cut read from
+    the interval stream's waiting triggers (R2, R6, R12 and R17 held, their LTL3 verdict
+    not definite: unknown). The JSON is the whole-trace judge's in each case."""
     rows = ["time,x,p,q,m"] + [f"{i / 10:.1f},1.5,{i % 3 == 0:d},{i % 4 == 0:d},{i % 7 < 3:d}"
                                for i in range(30)]
 
@@ -235,10 +235,14 @@ def test_what_sends_a_requirement_back_to_the_whole_trace_judge(plan, tmp_path):
     assert not back and ok == set(_ids(plan, range(99))) - WHOLE
     assert three["gap"] == ok
     ok, back = run("cut", lambda lines: lines.append("3.0,cut,cut,cut,cut"))
-    # (held and not definite at the cut, with a timing whose obligation may be open there)
-    assert back == {"R2", "R6", "R12", "R17"}
-    assert ok == set(_ids(plan, range(99))) - WHOLE - back
+    # every one decided by the streams, those whose obligation is open at the cut included
+    assert not back and ok == set(_ids(plan, range(99))) - WHOLE
     assert not three.get("cut")
+    path = tmp_path / "cut.csv"
+    verdicts = {v["requirement"]: v for v in json.loads(_json(plan, str(path)))["logs"][0][
+        "verdicts"]}
+    undecided = {i for i, v in verdicts.items() if v["verdict"] == "unknown"} - WHOLE
+    assert undecided >= {"R2", "R6", "R12", "R17"}, undecided
 
 
 def _plain_clocks(sampled: Path, folder: Path) -> list[Path]:
