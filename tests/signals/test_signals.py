@@ -78,6 +78,7 @@ def test_fixed_period_sample_and_hold_with_warmup(tmp_path):
     _equal_paths(src, b)
 
 
+@pytest.mark.tor("TOR-TCK-002")
 def test_period_not_dividing_the_log(tmp_path):
     src = open_log(_ab_log(tmp_path))
     b = make_bindings({"av": "/a.data"}, TickSpec(period_ns=300 * MS))
@@ -87,6 +88,7 @@ def test_period_not_dividing_the_log(tmp_path):
     _equal_paths(src, b)
 
 
+@pytest.mark.tor("TOR-TCK-005")
 def test_per_topic_tick(tmp_path):
     src = open_log(_ab_log(tmp_path))
     b = make_bindings(AB, TickSpec(topic="/b"))
@@ -113,6 +115,7 @@ def test_tick_topic_need_not_be_bound(tmp_path):
     _equal_paths(src, b)
 
 
+@pytest.mark.tor("TOR-TCK-003")
 def test_simultaneous_messages(tmp_path):
     msgs = [("/a", "std_msgs/msg/Float64", 0, float64(1.0)),
             ("/a", "std_msgs/msg/Float64", 10 * MS, float64(2.0)),
@@ -336,6 +339,7 @@ def test_truncated_log_samples_up_to_the_damage(tmp_path):
 # -- CSV -----------------------------------------------------------------------------------------
 
 
+@pytest.mark.tor("TOR-TCK-007")
 def test_csv_rows_are_ticks(tmp_path):
     p = tmp_path / "trace.csv"
     p.write_text("time,too_close,stopped,speed\n0.0,0,1,0\n0.5,1,1,0\n# note\n1.0,1,0,0.7\n")
@@ -350,6 +354,7 @@ def test_csv_rows_are_ticks(tmp_path):
     assert cols["too_close"].dtype == np.bool_ and cols["speed"].tolist() == [0.0, 0.0, 0.7]
 
 
+@pytest.mark.tor("TOR-TCK-007")
 def test_csv_with_bindings_and_period(tmp_path):
     p = tmp_path / "t.csv"
     p.write_text("speed,stop\n0.2,false\n0.9,false\n0.0,true\n")

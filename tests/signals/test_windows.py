@@ -210,3 +210,21 @@ def test_median_and_percentile_keep_an_order_statistics_structure(func):
         i = int(pos)
         j = min(i + 1, len(want) - 1)
         assert got == pytest.approx(want[i] + (want[j] - want[i]) * (pos - i), abs=1e-12)
+
+
+@pytest.mark.tor("TOR-TCK-004")
+def test_a_window_extends_the_warm_up_until_it_is_complete(tmp_path_factory):
+    """A window over 500 ms of /a, sent every 100 ms from 0: the ticks before the window is
+    complete are warm-up (0 to 400 ms), the first evaluated is at 500 ms, and every later
+    tick is evaluated; the same variable without a window is evaluated from the first
+    message on."""
+    path = _log(tmp_path_factory, [(t, float(t)) for t in range(0, 2001, 100)], [])
+    tick = TickSpec(period_ns=100 * MS)
+    s = sample(open_log(path), make_bindings({"m": "mean(/a.data, 500 ms)"}, tick))
+    ticks = list(s)
+    assert s.warmup_ticks == 5 and s.first_time == 500 * MS
+    assert [t.time for t in ticks] == [t * MS for t in range(500, 2001, 100)]
+    assert ticks[0].values["m"] == pytest.approx(300.0)  # (100 + ... + 500) / 5
+    assert _both_clocks(path, make_bindings({"m": "mean(/a.data, 500 ms)"}, tick)) == ticks
+    s = sample(open_log(path), make_bindings({"x": "/a.data"}, tick))
+    assert len(list(s)) == 21 and s.warmup_ticks == 0 and s.first_time == 0
