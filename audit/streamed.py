@@ -195,16 +195,14 @@ class CsvStreams:
     def close(self, source: CsvSource) -> None:
         """After the read: the results of the streams, or why a requirement is judged
         whole after all (module docstring)."""
-        marks = (GAP_ROW if source.gap_rows else
-                 "a cut row" if source.cut_time is not None else None)
         for s in self.streams:
             i = s.r.index
             unknown = [c for c in s.names if source.unknown_rows.get(c)]
-            why = s.gave_up or marks or (f"{UNKNOWN_CELLS}{', '.join(unknown)}"
-                                         if unknown else None)
+            why = s.gave_up or (GAP_ROW if source.gap_rows else None) or (
+                f"{UNKNOWN_CELLS}{', '.join(unknown)}" if unknown else None)
             if why is None and self.n == 0:
                 why = "no row"
-            if why == "a cut row" and not unknown and self.n:
+            if why is None and source.cut_time is not None:
                 self.results[i] = self._at_cut(s)
                 continue
             if why is not None:

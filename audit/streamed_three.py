@@ -25,11 +25,12 @@ from fretc.logs import CsvSource
 from fretc.monitors.completions import CompletionsStream, TooManyStates
 from fretc.monitors.definite import DefiniteStream
 from fretc.monitors.expressions import EvidenceUnsupported
-from fretc.monitors.interval import Evidence
+from fretc.monitors.interval import Evidence, IntervalStream
 from fretc.monitors.judge import compared_exprs
 from fretc.monitors.nan import nan_ticks_of
 from fretc.monitors.three_valued import KleeneStream, Ltl3SetStream
 from fretc.monitors.vectorized import VectorizeError
+from fretc.audit.damage import OpenObligation, verdict_at_damage
 from fretc.audit.finalize import StreamTicks, decided
 from fretc.audit.streamed import GAP_ROW, NAN_REASON, UNKNOWN_CELLS, CsvStreams
 from fretc.audit.unknown_ticks import (COMPLETED_NOTE, gap_words, outgrew_words,
@@ -85,6 +86,10 @@ class ThreeResult:
     cells: dict[str, np.ndarray]
     completed: bool = False
     outgrew: str = ""
+    #: the trace ends at a ``cut`` row, and the obligations open there
+    #: (:func:`fretc.audit.damage.open_obligations` over the rows as read)
+    cut: bool = False
+    opened: list[OpenObligation] = field(default_factory=list)
 
 
 @dataclass
@@ -109,11 +114,14 @@ class _Three:
     completions: CompletionsStream | None = None
     range: tuple[int, int] | None = None
     outgrew: str = ""
+    #: on a trace with a ``cut`` row: FRET's interval semantics over the rows as read, for
+    #: the obligations open at the cut (as the whole-trace judge reads them)
+    raw: IntervalStream | None = None
 
 
-def _three_of(r: RequirementPlan) -> _Three | str:
-    """The streams of ``r`` (a requirement :mod:`fretc.audit.streamed` took), or why they
-    cannot be made."""
+def _three_of(r: RequirementPlan, cut: bool) -> _Three | str:
+    """The streams of ``r`` (a requirement :mod:`fretc.audit.streamed` took; ``cut``: the
+    trace ends at a ``cut`` row), or why they cannot be made."""
     req, f = r.requirement, r.formalization
     assert req is not None and f is not None  # (streamed before: formalized)
     try:
@@ -121,10 +129,11 @@ def _three_of(r: RequirementPlan) -> _Three | str:
         definite = DefiniteStream(req, f.ticks)
         ltl3 = (None if r.offline or r.monitor_source is None
                 else Ltl3SetStream(r.monitor_source))
+        raw = IntervalStream(req, f.ticks, limit=1) if cut else None
     except (EvidenceUnsupported, VectorizeError) as exc:
         return str(exc)
     return _Three(r, tuple(r.variables), compared_exprs(req), kleene,
-                  definite, ltl3)
+                  definite, ltl3, raw=raw)
 
 
 @dataclass
@@ -150,12 +159,13 @@ class ThreeStreams:
     gap_rows: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
 
     @classmethod
-    def of(cls, requirements: Iterable[RequirementPlan]) -> ThreeStreams:
-        """The streams of each requirement of ``requirements`` whose streams can be made;
-        the others in :attr:`whole` with the reason."""
+    def of(cls, requirements: Iterable[RequirementPlan], cut: bool = False) -> ThreeStreams:
+        """The streams of each requirement of ``requirements`` whose streams can be made
+        (``cut``: on a trace ending at a ``cut`` row); the others in :attr:`whole` with the
+        reason."""
         out = cls([])
         for r in requirements:
-            got = _three_of(r)
+            got = _three_of(r, cut)
             if isinstance(got, str):
                 out.whole[r.index] = got
             else:
@@ -181,7 +191,7 @@ class ThreeStreams:
             if s.gave_up is None:
                 try:
                     _feed(s, columns, k, times, first, marked, stretch)
-                except (KeyError, VectorizeError, EvidenceUnsupported) as exc:
+                except (KeyError, VectorizeError, EvidenceUnsupported, ValueError) as exc:
                     s.gave_up = f"cannot be read a chunk at a time ({exc})"
 
     def close(self) -> None:
@@ -211,6 +221,11 @@ class ThreeStreams:
                                                s.nan[4]), self.n, self.last_time,
                                               (s.unknown[0], s.unknown[1], s.unknown[2]),
                                               what, {c: self.unknown_rows[c] for c in marked})
+                if s.raw is not None:
+                    s.raw.finish()
+                    self.results[i].cut = True
+                    self.results[i].opened = [OpenObligation(t, interval, why) for
+                                              t, interval, why in s.raw.open_at_end()]
                 if settled is not None:
                     _settle(self.results[i], *settled)
                 elif lo != hi:  # (open: every completion followed, another read)
@@ -270,22 +285,21 @@ def _feed(s: _Three, columns: Mapping[str, np.ndarray], k: int, times: np.ndarra
     s.definite.feed(cols, unknown, k, times, stretch)
     if s.ltl3 is not None:
         s.ltl3.feed(cols, unknown, k, times, stretch)
+    if s.raw is not None:
+        s.raw.feed(cols, k, times)
 
 
 def judged_three(plan: AuditPlan, streams: CsvStreams, source: CsvSource) -> None:
     """Read the CSV trace of ``source`` again (within its first read's bytes,
     :attr:`fretc.logs.CsvSource.extent`) with the three-valued streams of the requirements
     ``streams`` gave up for a NaN (:data:`NAN_REASON`), ``unknown`` cells in the columns
-    they read (:data:`UNKNOWN_CELLS`) or a ``gap`` row (:data:`GAP_ROW`), on a trace without
-    a ``cut`` row; those decided move from ``streams.whole`` to ``streams.results`` (a
-    :class:`ThreeResult`)."""
-    if source.cut_time is not None:
-        return
+    they read (:data:`UNKNOWN_CELLS`) or a ``gap`` row (:data:`GAP_ROW`); those decided move
+    from ``streams.whole`` to ``streams.results`` (a :class:`ThreeResult`)."""
     by_index = {r.index: r for r in plan.requirements}
     gaps = source.gap_rows
     todo = [by_index[i] for i, why in streams.whole.items()
             if why in (NAN_REASON, GAP_ROW) or why.startswith(UNKNOWN_CELLS)]
-    three = ThreeStreams.of(todo)
+    three = ThreeStreams.of(todo, cut=source.cut_time is not None)
     if not three.streams:
         return
     # (a gap row: every column unknown there, as csv_marks marks it, and a gap tick)
@@ -382,6 +396,15 @@ def finalize_three(plan: AuditPlan, r: RequirementPlan, got: ThreeResult, v: Ver
     v.unknown_ticks = count
     v.intervals, v.triggers, v.violations = ev.intervals, ev.triggers, ev.violations
     status, tick, time = got.ltl3
+    if got.cut:  # (as fretc.audit.unknown_ticks judges a trace cut at its end)
+        word, why = verdict_at_damage(holds is True, ev.triggers == 0, status, tick, got.n,
+                                      ev, got.opened, has_ltl3=not r.offline)
+        if word == "unknown":
+            v.verdict, v.unknown_reason = "unknown", why
+            ev.vacuous = False
+            v.ltl3 = Ltl3(status, tick, time)
+            return False
+        holds = word != "violated"
     if holds is None:
         v.verdict = "unknown"
         v.unknown_reason = unknown_reason(count, got.n, got.what, first, first_time,

@@ -72,25 +72,26 @@ def plan(tmp_path_factory):
 def _trace(rnd: random.Random, n: int, timed: bool, marks: str) -> str:
     """A CSV trace of ``n`` rows of ``x, p, q, m`` (``marks``: "" for a clean trace, or
     what makes some ticks unknown: ``nan``, ``unknown`` cells, ``both``, ``gap`` rows, a
-    ``cut`` row)."""
+    ``cut`` row; two of them joined by ``+``)."""
+    kinds = set(marks.split("+"))
     lines = ["time,x,p,q,m" if timed else "x,p,q,m"]
     t = 0.0
     sticky = [rnd.choice("01") for _ in range(3)]
     for _ in range(n):
         t += rnd.choice([0.1, 0.1, 0.2, 0.0])
-        if marks == "gap" and rnd.random() < 0.05:
+        if "gap" in kinds and rnd.random() < 0.05:
             cells = ["gap"] * 4
         else:
             for j in range(3):  # (runs of the booleans, so that scopes and triggers last)
                 if rnd.random() < 0.3:
                     sticky[j] = rnd.choice("01")
             cells = [rnd.choice(XS)] + sticky
-            if marks in ("nan", "both") and rnd.random() < 0.05:
+            if kinds & {"nan", "both"} and rnd.random() < 0.05:
                 cells[0] = "nan"
-            if marks in ("unknown", "both") and rnd.random() < 0.05:
+            if kinds & {"unknown", "both"} and rnd.random() < 0.05:
                 cells[rnd.randrange(4)] = "unknown"
         lines.append(",".join(([f"{t:.1f}"] if timed else []) + cells))
-    if marks == "cut":
+    if "cut" in kinds:
         lines.append(",".join(([f"{t + 0.1:.1f}"] if timed else []) + ["cut"] * 4))
     return "\n".join(lines) + "\n"
 
@@ -136,7 +137,8 @@ def _ids(plan, indexes) -> set[str]:
 
 
 _TRACES = (st.integers(1, 60), st.booleans(),
-           st.sampled_from(["", "", "", "nan", "unknown", "both", "gap", "cut"]),
+           st.sampled_from(["", "", "", "nan", "unknown", "both", "gap", "cut", "gap+cut",
+                            "both+cut"]),
            st.integers(1, 7), st.integers(1, 9), st.randoms(use_true_random=False))
 
 
@@ -182,10 +184,10 @@ def check_trace(tmp_path_factory, n: int, timed: bool, marks: str, rows: int, ch
     assert got == whole
     streamed_ids = _ids(plan, decided["results"])
     assert not streamed_ids & WHOLE
-    if marks in ("", "nan", "unknown", "both", "gap", "cut") and chunk >= 3:
-        # a clean trace, one cut at its end, or one whose NaN, unknown cells and gap rows
-        # the three-valued streams take (a gap row as a gap tick, one tick or more): every
-        # requirement but
+    if chunk >= 3:
+        # a clean trace, or one whose NaN, unknown cells and gap rows the three-valued
+        # streams take (a gap row as a gap tick, one tick or more), cut at its end or not:
+        # every requirement but
         # WHOLE streamed (a robustness chunk shorter than a bounded window, R14's 3 ticks,
         # is refused)
         assert streamed_ids == {r.id for r in plan.requirements} - WHOLE, decided["whole"]
@@ -198,7 +200,8 @@ def test_what_sends_a_requirement_back_to_the_whole_trace_judge(plan, tmp_path):
     cell those reading its column, and a ``gap`` row (one tick or more) every one; a ``cut``
     row none: the streams decide every one, an obligation still open at the cut read from
     the interval stream's waiting triggers (R2, R6, R12 and R17 held, their LTL3 verdict
-    not definite: unknown). The JSON is the whole-trace judge's in each case."""
+    not definite: unknown), and with a ``gap`` row too the three-valued streams decide every
+    one at the cut. The JSON is the whole-trace judge's in each case."""
     rows = ["time,x,p,q,m"] + [f"{i / 10:.1f},1.5,{i % 3 == 0:d},{i % 4 == 0:d},{i % 7 < 3:d}"
                                for i in range(30)]
 
@@ -243,6 +246,14 @@ def test_what_sends_a_requirement_back_to_the_whole_trace_judge(plan, tmp_path):
         "verdicts"]}
     undecided = {i for i, v in verdicts.items() if v["verdict"] == "unknown"} - WHOLE
     assert undecided >= {"R2", "R6", "R12", "R17"}, undecided
+
+    def gap_and_cut(lines):
+        lines.insert(12, "1.05,gap,gap,gap,gap")
+        lines.append("3.0,cut,cut,cut,cut")
+
+    ok, back = run("gap and cut", gap_and_cut)  # (the three-valued streams at the cut)
+    assert not back and ok == set(_ids(plan, range(99))) - WHOLE
+    assert three["gap and cut"] == ok
 
 
 def _plain_clocks(sampled: Path, folder: Path) -> list[Path]:
