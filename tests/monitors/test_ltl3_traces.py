@@ -55,3 +55,21 @@ def test_a_table_of_unequal_rows_is_stepped_one_tick_at_a_time(monkeypatch_sessi
     letters = np.array([0, 1, 0, 0, 1, 0], np.uint16)
     got = J.first_rejections(table, 0, letters, np.array([0, 2, 5]), np.array([2, 3, 1]))
     assert got.tolist() == [1, 2, -1]
+
+
+@pytest.mark.tor("TOR-VER-009", "TOR-GEN-002")
+def test_a_rejection_past_the_first_chunk_of_letters_is_found_at_its_tick():
+    """The letters are read into Python a chunk at a time (``_LETTERS_CHUNK``): a rejection
+    in any chunk, at a chunk's edge included, is found at its own tick, and a trace with no
+    rejecting letter is never rejected."""
+    table = [[0, -1]]  # letter 1 rejects
+    chunk = J._LETTERS_CHUNK
+    n = 3 * chunk
+    for at in (5, chunk - 1, chunk, chunk + 7, 2 * chunk + 1, n - 1):
+        letters = np.zeros(n, np.uint16)
+        letters[at] = 1
+        assert J.first_rejections(table, 0, letters, np.array([0]), np.array([n])).tolist() \
+            == [at], at
+        assert J._first_rejection(table, 0, letters) == at
+    assert J.first_rejections(table, 0, np.zeros(n, np.uint16), np.array([0]),
+                              np.array([n])).tolist() == [-1]
