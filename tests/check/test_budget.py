@@ -179,6 +179,7 @@ def _subsets(pool, bad, budget: int):
     return [[x.id for x in s] for s in got.subsets], got.standing, got.cut
 
 
+@pytest.mark.tor("TOR-CHK-002")
 def test_subsets_say_smallest_only_when_every_smaller_subset_was_checked():
     """{H1, H2} and {H3, H4, H5} conflict; deletion from the whole set finds
     {H3, H4, H5} first. With no budget for more checks it is minimal, not smallest; with
@@ -194,6 +195,7 @@ def test_subsets_say_smallest_only_when_every_smaller_subset_was_checked():
                                          [SMALLEST, MINIMAL], False)
 
 
+@pytest.mark.tor("TOR-CHK-002")
 def test_a_subset_with_an_unknown_check_is_not_shown_minimal():
     pool = _items(3)
 
