@@ -12,21 +12,17 @@ from click.testing import CliRunner
 from fretc.cli import main
 from fretc.reports.check_section import check_context
 
+from _fret_export import fret_export
+
 
 def _export(tmp_path: Path) -> str:
-    def var(comp: str, name: str, kind: str) -> dict:
-        return {"component_name": comp, "variable_name": name, "idType": kind,
-                "dataType": "boolean"}
-    doc = {"requirements": [
-        {"reqid": "C1", "fulltext": "whenever a ctrl shall immediately satisfy o"},
-        {"reqid": "C2", "fulltext": "whenever a ctrl shall immediately satisfy !o"},
-        {"reqid": "M1", "fulltext": "whenever o mon shall immediately satisfy w"},
-        {"reqid": "M2", "fulltext": "whenever o mon shall immediately satisfy !w"}],
-        "variables": [var("ctrl", "a", "Input"), var("ctrl", "o", "Output"),
-                      var("mon", "o", "Input"), var("mon", "w", "Output")]}
-    path = tmp_path / "p.json"
-    path.write_text(json.dumps(doc), encoding="utf-8")
-    return str(path)
+    return fret_export(tmp_path / "p.json", {
+        "C1": "whenever a ctrl shall immediately satisfy o",
+        "C2": "whenever a ctrl shall immediately satisfy !o",
+        "M1": "whenever o mon shall immediately satisfy w",
+        "M2": "whenever o mon shall immediately satisfy !w"},
+        [("ctrl", "a", "Input"), ("ctrl", "o", "Output"), ("mon", "o", "Input"),
+         ("mon", "w", "Output")])
 
 
 def test_the_report_shows_fret_s_table_and_every_component_s_findings(tmp_path):

@@ -19,6 +19,8 @@ from click.testing import CliRunner
 
 from fretc.cli import main
 
+from _fret_export import fret_export
+
 REPO = Path(__file__).resolve().parents[2]
 REQS = REPO / "requirements"
 BINDINGS = REQS / "safe_ros.bindings.toml"
@@ -142,18 +144,12 @@ def test_testgen_writes_the_bindings_period(tmp_path):
 
 def _two_components(tmp_path: Path) -> str:
     """A FRET export of two components: ``ctrl``'s pair conflicts, ``mon`` counts seconds."""
-    def var(comp: str, name: str, kind: str) -> dict:
-        return {"component_name": comp, "variable_name": name, "idType": kind,
-                "dataType": "boolean"}
-    doc = {"requirements": [
-        {"reqid": "C1", "fulltext": "whenever a ctrl shall immediately satisfy o"},
-        {"reqid": "C2", "fulltext": "whenever a ctrl shall immediately satisfy !o"},
-        {"reqid": "M1", "fulltext": "upon b mon shall within 2 seconds satisfy w"}],
-        "variables": [var("ctrl", "a", "Input"), var("ctrl", "o", "Output"),
-                      var("mon", "b", "Input"), var("mon", "w", "Output")]}
-    path = tmp_path / "p.json"
-    path.write_text(json.dumps(doc), encoding="utf-8")
-    return str(path)
+    return fret_export(tmp_path / "p.json", {
+        "C1": "whenever a ctrl shall immediately satisfy o",
+        "C2": "whenever a ctrl shall immediately satisfy !o",
+        "M1": "upon b mon shall within 2 seconds satisfy w"},
+        [("ctrl", "a", "Input"), ("ctrl", "o", "Output"), ("mon", "b", "Input"),
+         ("mon", "w", "Output")])
 
 
 def test_a_component_with_no_period_is_not_checked_and_the_others_are(tmp_path):
