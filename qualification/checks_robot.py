@@ -17,7 +17,8 @@ import types
 from typing import Any
 
 from fretc.qualification import reference as ref
-from fretc.qualification.checks import SEED, Check, CheckSkipped, Run, compiled_keys
+from fretc.qualification.checks import (SEED, Check, CheckSkipped, Run, _capped,
+                                        compiled_keys, traces)
 from fretc.qualification.checks_audit import fretc
 from fretc.qualification.checks_forms import (C_TIMEOUT, _compiler, _folder, _load,
                                               shield_command)
@@ -215,6 +216,73 @@ def check_prove(run: Run) -> list[str]:
     return out
 
 
+#: C2PO's mission time in the R2U2 check (the suite's traces are shorter)
+C2PO_MISSION = 12
+#: traces of the suite the R2U2 check runs (one engine run per batch and trace)
+C2PO_TRACES = 12
+
+
+def check_c2po_r2u2(run: Run) -> list[str]:
+    """The 288 keys' ``--emit c2po`` text through R2U2 itself (the build of
+    ``tools/r2u2/build.sh``; skipped without it): C2PO accepts every entry, and for those
+    without ``S`` or ``T`` (R2U2's engine computes them wrongly at the pinned commit) R2U2's
+    verdict at each tick of the suite's traces is FRET's finite-trace verdict of the prefix
+    ending there (the reference evaluator)."""
+    from fretc.qualification import r2u2
+
+    tool = r2u2.locate()
+    if tool is None:
+        raise CheckSkipped(r2u2.NOT_BUILT)
+    folder = _folder(run, "c2po-r2u2")
+    keys = {f"K{i:03d}": key for i, (key, _text) in enumerate(ref.key_sentences())}
+    fret = folder / "keys.fret"
+    fret.write_text("".join(f"{rid}: {text}\n" for rid, (_k, text)
+                            in zip(keys, ref.key_sentences())), encoding="utf-8")
+    code, text = fretc(run, ["compile", str(fret), "--emit", "c2po", "-o",
+                             str(folder / "keys.c2po")])
+    if code != 0:
+        return [f"--emit c2po: exit {code}: {text.strip()[-300:]}"]
+    spec = r2u2.read_spec((folder / "keys.c2po").read_text(encoding="utf-8"))
+    compared = [x for x in spec.entries if not spec.since_or_trigger(x)]
+    try:
+        r2u2.type_check(tool, spec, [x for x in spec.entries if x not in compared],
+                        C2PO_MISSION, folder / "accepted")
+        batches = r2u2.compile_batches(tool, spec, C2PO_MISSION, folder / "compared",
+                                       compared)
+    except r2u2.R2U2Error as exc:
+        return [f"C2PO refused fretc's specification: {str(exc)[-400:]}"]
+    if sorted(spec.entries) != sorted(keys) or not compared:
+        return [f"--emit c2po wrote {len(spec.entries)} entries ({len(compared)} without S "
+                f"or T) for the {len(keys)} keys"]
+    return _capped(_r2u2_verdicts(run, tool, spec, batches, keys, folder))
+
+
+def _r2u2_verdicts(run: Run, tool: Any, spec: Any, batches: list, keys: dict[str, str],
+                   folder: Any) -> list[str]:
+    """R2U2's verdicts (the compiled ``batches`` of ``spec``) on the suite's first
+    :data:`C2PO_TRACES` traces against the reference at each tick: the failures."""
+    from fretc.qualification import r2u2
+
+    out = []
+    for n, trace in enumerate(traces(run)[:C2PO_TRACES]):
+        csv_path = folder / f"trace{n}.csv"
+        r2u2.write_trace(csv_path, spec, trace)
+        want = {rid: [ref.verdict(key, trace[:i + 1]) != "violated"
+                      for i in range(len(trace))] for rid, key in keys.items()}
+        for binary, ids in batches:
+            try:
+                streams = r2u2.run(tool, binary, csv_path)
+                got = {ids[i]: r2u2.per_tick(s, len(trace)) for i, s in streams.items()}
+            except r2u2.R2U2Error as exc:
+                out.append(f"R2U2 on trace {n}: {str(exc)[-300:]}")
+                continue
+            if sorted(got) != sorted(ids.values()):
+                out.append(f"R2U2 gave no verdict of {sorted(set(ids.values()) - set(got))}")
+            out += [f"{keys[rid]} on trace {n}: R2U2 {v}, expected {want[rid]}"
+                    for rid, v in sorted(got.items()) if v != want[rid]]
+    return out
+
+
 #: the checks of the generated code that runs on the robot, in the order they run
 CHECKS: tuple[Check, ...] = (
     Check("monitors-ltl3", ("TOR-GEN-002", "TOR-VER-009"),
@@ -225,4 +293,6 @@ CHECKS: tuple[Check, ...] = (
           "the shield's C form, strict flags, against its Python form", check_shield_c),
     Check("shield-prove", ("TOR-SHD-002",),
           "--prove proves the closed loop, never an impossible assumption", check_prove),
+    Check("c2po-r2u2", ("TOR-GEN-006",),
+          "--emit c2po through C2PO and R2U2 against the reference", check_c2po_r2u2),
 )
