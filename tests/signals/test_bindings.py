@@ -175,6 +175,7 @@ def test_division_by_zero_is_ieee():
     assert math.isnan(ev("/a.z / /a.z", m))
 
 
+@pytest.mark.tor("TOR-DMG-004", "TOR-VER-004")
 def test_nan_compares_unknown_and_logic_is_three_valued():
     """[tick] nan = "unread" (the default): a comparison with NaN is NaN, Kleene logic."""
     m = {"/a": NS(x=math.nan, y=1.0, arr=np.array([1.0, math.nan, 7.0]))}
@@ -207,6 +208,7 @@ def test_nan_policy_false_is_ieee():
     assert ev_false("/a.x & true") is True  # a number read as a boolean: != 0
 
 
+@pytest.mark.tor("TOR-DMG-004", "TOR-VER-004")
 @settings(max_examples=60, deadline=None)
 @given(st.lists(st.sampled_from([0.0, 1.0, 6.0, math.nan]), min_size=1, max_size=8),
        st.lists(st.sampled_from([0.0, 3.0, math.nan]), min_size=1, max_size=8),
