@@ -180,6 +180,9 @@ def test_header_time_base_reorders_and_reports(tmp_path):
     kinds = [(p.kind, p.log_time) for p in s.signal_problems]
     assert kinds == [(P.HEADER_BACKWARDS, 1200 * MS), (P.HEADER_BACKWARDS, 5100 * MS),
                      (P.HEADER_LATE, 5100 * MS)]
+    # the late stamp (1020 ms) against the newest one used (1050 ms)
+    assert s.signal_problems[-1].detail.startswith(
+        "header.stamp 1020000000 is 30000000 ns older than a message already used")
     assert s.problems == src.problems + s.signal_problems
     _equal_paths(src, b)
     # The same log on log time: no reordering, no problems.
@@ -352,6 +355,30 @@ def test_csv_rows_are_ticks(tmp_path):
     times, cols = sample_arrays(src)
     assert times.tolist() == [0, 500 * MS, S]
     assert cols["too_close"].dtype == np.bool_ and cols["speed"].tolist() == [0.0, 0.0, 0.7]
+
+
+@pytest.mark.tor("TOR-TCK-007")
+def test_csv_times_are_exact_ns_and_a_column_is_boolean_or_numeric(tmp_path, monkeypatch):
+    """A time column's seconds are read to the ns (whole, negative, the largest an int64 of
+    ns holds); a time past that bound is refused at its line; a column mixing true/false and
+    numbers is refused, also when they come in different chunks of rows."""
+    from fretc.common.problems import CsvError
+    from fretc.logs.csv import read as csv_read
+
+    p = tmp_path / "t.csv"
+    p.write_text("time,ok\n-1.5,1\n0,1\n2,0\n9223372036.854775807,1\n")
+    times, cols = sample_arrays(open_log(p))
+    assert times.tolist() == [-1500 * MS, 0, 2 * S, (1 << 63) - 1]
+    assert cols["ok"].tolist() == [True, True, False, True]
+    for rows in ("0,1\n9223372036.854775808,1\n", "-9223372036.854775809,1\n0,1\n"):
+        p.write_text("time,ok\n" + rows)
+        with pytest.raises(CsvError, match=r"t\.csv:\d.*time .* s is out of range"):
+            sample_arrays(open_log(p))
+    monkeypatch.setattr(csv_read, "CHUNK_ROWS", 1)
+    for rows in ("0,0.5\n1,true\n", "0,true\n1,0.5\n"):
+        p.write_text("time,x\n" + rows)
+        with pytest.raises(CsvError, match="column mixes true/false .* with numbers"):
+            sample_arrays(open_log(p))
 
 
 @pytest.mark.tor("TOR-TCK-007")
