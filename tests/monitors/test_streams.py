@@ -335,6 +335,7 @@ def _fed_ltl3(ms, rnd, n, cols, times):
     return stream.finish()
 
 
+@pytest.mark.tor("TOR-VER-009", "TOR-LOG-003")
 @settings(max_examples=200, deadline=None)
 @given(st.integers(0, len(KEYS) - 1), st.integers(1, 40), _SEEDS)
 def test_ltl3_stream_equals_ltl3_verdict(all_keys, index, n, rnd):
@@ -345,6 +346,7 @@ def test_ltl3_stream_equals_ltl3_verdict(all_keys, index, n, rnd):
     assert time == (None if tick is None else int(times[tick])), index
 
 
+@pytest.mark.tor("TOR-VER-009", "TOR-LOG-003")
 @settings(max_examples=150, deadline=None)
 @given(st.integers(0, 2**32 - 1), st.integers(1, 40), _SEEDS)
 def test_ltl3_stream_of_random_requirements(seed, n, rnd):
@@ -375,6 +377,7 @@ def test_ltl3_stream_takes_an_atom_over_pre_in_one_chunk():
     assert stream.finish()[:2] == ("violated", 2)
 
 
+@pytest.mark.tor("TOR-VER-009", "TOR-LOG-003")
 def test_ltl3_stream_carries_past_atoms_and_refuses_chains():
     """An atom holding a past-time function is evaluated with its state carried (a 3-tick
     window across 1-tick chunks); an automaton without a table is refused as ltl3_verdict

@@ -63,6 +63,7 @@ def test_long_random_traces_agree(all_keys):
         assert ltl3_verdict(ms, cols, n) == st
 
 
+@pytest.mark.tor("TOR-VER-009")
 @pytest.mark.parametrize("together", [1, 32])
 def test_the_verdicts_of_many_traces_at_once_are_each_ones_own(all_keys, together,
                                                                monkeypatch):
