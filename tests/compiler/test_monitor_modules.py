@@ -7,6 +7,7 @@ from __future__ import annotations
 import random
 import types
 
+import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -256,3 +257,24 @@ def test_names_of_code_agree_with_dis(kinds, n_filler, rnd):
     mm = codegen.build_monitor_module(compiled_files()[:3], "m")
     mod_code = compile(mm.text, "m", "exec")
     assert codegen._names(mod_code) == _names_by_dis(mod_code)
+
+
+@pytest.mark.tor("TOR-GEN-001")
+def test_a_file_of_300_requirements_keeps_every_monitor_and_its_verdicts():
+    """A requirement file large enough that its module's code has more than 256 names (its
+    name operations then carry an ``EXTENDED_ARG`` prefix, which the load check decodes)
+    gets a monitor for every requirement, none skipped, each ending with its verdict."""
+    texts = [(f"R{i}", f"the sw shall always satisfy v{i} > {i}") for i in range(300)]
+    entries = [RequirementEntry(id=rid, text=text, source="big.fret", line=i + 1, column=1,
+                                requirement=parse(text))
+               for i, (rid, text) in enumerate(texts)]
+    errors: list = []
+    mm = codegen.build_monitor_module(compile_entries(entries), "big", errors)
+    assert len(compile(mm.text, "big", "exec").co_names) > 256
+    mod = load(mm)
+    assert not errors and mod.SKIPPED == {} and list(mod.MONITORS) == [r for r, _ in texts]
+    for k, second, holds in ((0, 1, True), (150, 150, False), (299, 300, True)):
+        mon = mod.MONITORS[f"R{k}"]()
+        mon.step({f"v{k}": k + 1})
+        mon.step({f"v{k}": second})
+        assert bool(mon.finish()) is holds
