@@ -279,3 +279,18 @@ def test_check_time_options_refuse_nan_infinities_and_non_positive(tmp_path, opt
     res = CliRunner().invoke(main, ["check", str(tmp_path / "a.fret"), option, value])
     # fretc's refusal naming the option, not click's wording around it
     assert res.exit_code == 2 and f"'{option}'" in res.output, res.output
+
+
+@pytest.mark.tor("TOR-CHK-002")
+def test_a_minimal_conflict_of_four_of_five_is_found_beside_the_pair_deletion_finds():
+    """{H1, H5} and {H1, H2, H3, H4} conflict; deletion from the whole set finds
+    {H1, H5}; the enumeration goes on to every size, so the conflict of four of the five is
+    found too (minimal, not smallest)."""
+    pool = _items(5)
+
+    def bad(s):
+        ids = {x.index for x in s}
+        return {0, 4} <= ids or {0, 1, 2, 3} <= ids
+
+    assert _subsets(pool, bad, 1000) == ([["H1", "H5"], ["H1", "H2", "H3", "H4"]],
+                                         [SMALLEST, MINIMAL], False)
