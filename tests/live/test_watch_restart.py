@@ -87,11 +87,13 @@ def test_a_publisher_restart_continues_the_run_and_the_violation_after_it_is_see
     assert exit_code([la]) == 1
 
 
+@pytest.mark.tor("TOR-WCH-002")
 def test_the_messages_of_a_restart_are_a_gap_not_held_over(plan):
     # good values on both sides: the ticks between 450 ms and 1 s were not read, so the run
     # is incomplete (exit 3), and the verdict is never a clean satisfied with exit 0
     w, la, _, _ = _watch(plan, _restart(1.0))
     assert la.partial and PUBLISHER_RESTART in _kinds(la)
+    assert la.damage_time_ns == T0 + 450 * MS + 1  # just after the last message before it
     assert w.unknown_ticks >= 4  # ticks 500..900 ms lie inside the gap
     assert exit_code([la]) == 3
 

@@ -18,6 +18,7 @@ pytestmark = pytest.mark.watch
 
 
 @pytest.mark.parametrize("transport", ["dds", "zenoh"])
+@pytest.mark.tor("TOR-WCH-001")
 def test_nodes_that_start_after_the_watch_join_the_run(transport, tmp_path, dds_xml):
     """/a's node starts 3 s after the watch (whose --wait is 1 s) and /b's 1 s later; /a goes
     negative at its message 20: RA is violated there, RB (over /b) satisfied, RG (over a
