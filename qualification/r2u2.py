@@ -29,6 +29,7 @@ from __future__ import annotations
 import os
 import re
 import subprocess
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -105,7 +106,7 @@ class Spec:
     entries: dict
     fret_names: dict
 
-    def batch(self, labels) -> str:
+    def batch(self, labels: Iterable[str]) -> str:
         """A C2PO text with every signal and the entries of ``labels``."""
         return self.head + "\nPTSPEC\n" + "".join(self.entries[x] for x in labels)
 
@@ -143,7 +144,7 @@ def write_trace(path: Path, spec: Spec, states: list) -> None:
 
 
 def compile_batches(tool: R2U2, spec: Spec, mission_time: int, folder: Path,
-                    labels=None, size: int = 8) -> list:
+                    labels: Iterable[str] | None = None, size: int = 8) -> list:
     """C2PO's binaries of the entries ``labels`` of ``spec`` (default: all), at most
     ``size`` entries a binary and each within the engine's bounds (a batch over them is split
     in two and compiled again): ``[(binary path, {formula id: label})]``. All batches are
@@ -195,7 +196,8 @@ def _c2po(tool: R2U2, spec: Spec, groups: list, mission_time: int, folder: Path,
     return out
 
 
-def type_check(tool: R2U2, spec: Spec, labels, mission_time: int, folder: Path) -> None:
+def type_check(tool: R2U2, spec: Spec, labels: Sequence[str], mission_time: int,
+               folder: Path) -> None:
     """C2PO parses and type-checks the entries ``labels`` of ``spec`` (one file, C2PO's
     ``parse_c2po``, ``parse_map`` and ``type_check``); R2U2Error with C2PO's messages if
     it refuses any."""
