@@ -10,30 +10,15 @@ Design notes: ARCHITECTURE.md, `audit/damage.py`."""
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import dataclass
 
 import numpy as np
 
 from fretc.fretish import ast as A
 
 from fretc.monitors.interval import Evidence, EvidenceUnsupported, IntervalStream
+from fretc.monitors.obligations import OpenObligation
 
 __all__ = ["OpenObligation", "open_obligations", "verdict_at_damage"]
-
-
-@dataclass(frozen=True)
-class OpenObligation:
-    """A trigger whose obligation the end of the intact span leaves undecided.
-
-    Attributes:
-        trigger_tick: the trigger point ``t`` (0-based tick of the intact span).
-        interval: the scope interval ``(s, e)`` holding it; ``e`` is the last intact tick.
-        what: the obligation still open, in tick numbers.
-    """
-
-    trigger_tick: int
-    interval: tuple[int, int]
-    what: str
 
 
 def open_obligations(req: A.Requirement, columns: Mapping[str, np.ndarray], n: int,
@@ -64,7 +49,7 @@ def open_obligations(req: A.Requirement, columns: Mapping[str, np.ndarray], n: i
     s = IntervalStream(req, duration_ticks, limit=max(limit, 1))
     s.feed(columns, n, np.arange(n, dtype=np.int64))
     s.finish()
-    return [OpenObligation(t, interval, why) for t, interval, why in s.open_at_end(limit)]
+    return s.open_at_end(limit)
 
 
 def verdict_at_damage(holds: bool, vacuous: bool, status: str | None,

@@ -22,12 +22,12 @@ import numpy as np
 
 from fretc.fretish import ast as A
 from fretc.logs import CsvSource
-from fretc.audit.damage import OpenObligation
 from fretc.monitors.expressions import EvidenceUnsupported
 from fretc.monitors.interval import Evidence
 from fretc.monitors.interval import IntervalStream, stream_unsupported
 from fretc.monitors.judge import Ltl3Stream, compared_exprs
 from fretc.monitors.nan import nan_ticks_of
+from fretc.monitors.obligations import OpenObligation
 from fretc.monitors.robustness import RobustnessStream, RobustnessSummary
 from fretc.monitors.vectorized import VectorizeError, supports
 from fretc.audit.verdict import MARGIN_POINTS
@@ -224,10 +224,8 @@ class CsvStreams:
         assert self.last_time is not None  # (n rows)
         ev, times = s.interval.finish()
         ltl3 = s.ltl3.finish() if s.ltl3 is not None else ("unknown", None, None)
-        opened = [OpenObligation(t, interval, why)
-                  for t, interval, why in s.interval.open_at_end()]
         return StreamedResult(ev, times, ltl3, s.rob.finish(), self.n, self.last_time,
-                              cut=True, opened=opened)
+                              cut=True, opened=s.interval.open_at_end())
 
 
 def feed_streams(s: RequirementStreams, columns: Mapping[str, np.ndarray], k: int,

@@ -28,9 +28,10 @@ from fretc.monitors.expressions import EvidenceUnsupported
 from fretc.monitors.interval import Evidence, IntervalStream
 from fretc.monitors.judge import compared_exprs
 from fretc.monitors.nan import nan_ticks_of
+from fretc.monitors.obligations import OpenObligation
 from fretc.monitors.three_valued import KleeneStream, Ltl3SetStream
 from fretc.monitors.vectorized import VectorizeError
-from fretc.audit.damage import OpenObligation, verdict_at_damage
+from fretc.audit.damage import verdict_at_damage
 from fretc.audit.finalize import StreamTicks, decided
 from fretc.audit.streamed import GAP_ROW, NAN_REASON, UNKNOWN_CELLS, CsvStreams
 from fretc.audit.unknown_ticks import (COMPLETED_NOTE, gap_words, outgrew_words,
@@ -224,8 +225,7 @@ class ThreeStreams:
                 if s.raw is not None:
                     s.raw.finish()
                     self.results[i].cut = True
-                    self.results[i].opened = [OpenObligation(t, interval, why) for
-                                              t, interval, why in s.raw.open_at_end()]
+                    self.results[i].opened = s.raw.open_at_end()
                 if settled is not None:
                     _settle(self.results[i], *settled)
                 elif lo != hi:  # (open: every completion followed, another read)

@@ -27,7 +27,8 @@ from fretc.fretish.fret_since import SINCE
 from fretc.monitors.evidence import MAX_LISTED, Evidence, Violation
 from fretc.monitors.expressions import ColumnExpressions, EvidenceUnsupported
 from fretc.monitors.interval_fates import BOUNDED, NONE, Bounded, Chunk, Group, Ledger
-from fretc.monitors.obligations import OBLIGATIONS, Interval, OneTrigger, open_reason
+from fretc.monitors.obligations import (OBLIGATIONS, Interval, OneTrigger, OpenObligation,
+                                        open_reason)
 
 __all__ = ["EvidenceUnsupported", "Violation", "Evidence", "MAX_LISTED", "IntervalStream",
            "evaluate_requirement", "verdict_of", "every_trigger", "Triggered", "duration_of",
@@ -483,11 +484,10 @@ class IntervalStream:
         self._result = self._ledger.evidence(self.n)
         return self._result
 
-    def open_at_end(self, limit: int = 1) -> list[tuple[int, Interval, str]]:
+    def open_at_end(self, limit: int = 1) -> list[OpenObligation]:
         """After :meth:`finish`: the first ``limit`` triggers whose obligation the ticks fed
-        neither meet nor miss, as ``(t, (s, e), why)`` (``(s, e)`` the scope interval open at
-        the last tick ``e``; ``why`` :func:`fretc.monitors.obligations.open_reason`'s
-        words): the obligations a damage after the last tick leaves open."""
+        neither meet nor miss (their scope interval open at the last tick), earliest first:
+        the obligations a damage after the last tick leaves open."""
         assert self._result is not None  # (finished)
         if self._waiting is None:
             return []
@@ -499,7 +499,7 @@ class IntervalStream:
             why = open_reason(timing, negate, t, e, k,
                               OneTrigger(t, e + 1 if first is None else first))
             if why is not None:
-                out.append((t, (s, e), why))
+                out.append(OpenObligation(t, (s, e), why))
                 if len(out) >= limit:
                     break
         return out

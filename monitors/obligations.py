@@ -9,10 +9,12 @@ questions asked of one trigger in O(1) from next-true indexes over a trace."""
 from __future__ import annotations
 
 import functools
+from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["OBLIGATIONS", "FirstEvents", "OneTrigger", "Interval", "open_reason"]
+__all__ = ["OBLIGATIONS", "FirstEvents", "OneTrigger", "OpenObligation", "Interval",
+           "open_reason"]
 
 Interval = tuple[int, int]
 
@@ -95,6 +97,22 @@ class FirstEvents:
     def nS(self) -> _Ints | None:
         """The first tick at or after each where S holds (n where none); None without S."""
         return _Ints(_next_true(self._S)) if self._S is not None else None
+
+
+@dataclass(frozen=True)
+class OpenObligation:
+    """A trigger whose obligation the end of the ticks read leaves undecided (a damage
+    there: :func:`fretc.audit.damage.verdict_at_damage`).
+
+    Attributes:
+        trigger_tick: the trigger point ``t`` (0-based tick).
+        interval: the scope interval ``(s, e)`` holding it; ``e`` is the last tick read.
+        what: the obligation still open, in tick numbers (:func:`open_reason`'s words).
+    """
+
+    trigger_tick: int
+    interval: Interval
+    what: str
 
 
 class OneTrigger:

@@ -54,7 +54,7 @@ def _streamed(req: A.Requirement, cols: dict, n: int, k: int, rnd: random.Random
                np.arange(at, at + step, dtype=np.int64))
         at += step
     s.finish()
-    return s.open_at_end(limit)
+    return [(o.trigger_tick, o.interval, o.what) for o in s.open_at_end(limit)]
 
 
 @pytest.mark.tor("TOR-DMG-003")
