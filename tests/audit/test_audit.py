@@ -404,6 +404,24 @@ def test_missing_topic_and_binding_are_errors_of_the_requirement(tmp_path):
     assert "no binding for 'battery'" in _by_req(la)["A4"].error
 
 
+@pytest.mark.tor("TOR-VER-003", "TOR-VER-005")
+def test_a_future_time_requirement_is_judged_offline_or_is_an_error(tmp_path):
+    """A requirement with a future-time function has no online monitor: the interval
+    semantics decides it (violated at its tick); one the interval semantics cannot evaluate
+    either (a function it does not compute) is an error with that reason."""
+    (tmp_path / "r.fret").write_text(
+        "R1: the sw shall always satisfy persists(1, p) | q\n"
+        "R2: the sw shall always satisfy persists(1, p) | sqrt(x) > 1\n")
+    (tmp_path / "t.csv").write_text(
+        "time,p,q,x\n0,true,true,1\n1,true,false,2\n2,false,true,3\n3,true,true,4\n")
+    v = _by_req(audit_log(_plan(tmp_path / "r.fret"), str(tmp_path / "t.csv")))
+    assert v["R1"].verdict == "violated" and v["R1"].engine == "interval"
+    assert v["R1"].first_violation.at.tick == 1
+    assert v["R2"].verdict == "error", v["R2"]
+    assert v["R2"].error.startswith("no online monitor and no interval semantics for it: "
+                                    "function sqrt/1 is not evaluated"), v["R2"].error
+
+
 @pytest.mark.tor("TOR-VER-006")
 def test_the_summary_counts_partial_logs_and_log_errors(tmp_path):
     """The summary's counts beside its exit code: a complete log, a partial one and one that

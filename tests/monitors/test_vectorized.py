@@ -82,6 +82,23 @@ def test_the_verdicts_of_many_traces_at_once_are_each_ones_own(all_keys, togethe
         assert got == [ltl3_verdict(ms, t, int(m)) for t, m in zip(traces, lengths)], comp.text
 
 
+@pytest.mark.tor("TOR-VER-009")
+@pytest.mark.parametrize("text, verdict", [("the sw shall always satisfy r | !r", "satisfied"),
+                                           ("the sw shall always satisfy false", "violated")])
+def test_the_verdicts_of_many_traces_decided_before_any_tick(text, verdict):
+    """A requirement decided before any tick (its good or bad automaton empty) gets that
+    verdict, at no tick, in each of many traces at once, as in each alone."""
+    from _monitor_helpers import compiled_of
+
+    _comp, ms = compiled_of(text)
+    lengths = np.array([2, 1, 3], np.int64)
+    firsts = (np.cumsum(lengths) - lengths).astype(np.int64)
+    cols = {"r": np.array([True, False, False, True, True, False])}
+    got = ltl3_verdicts(ms, cols, 6, np.repeat(firsts, lengths), firsts, lengths)
+    assert got == [(verdict, None)] * 3
+    assert ltl3_verdict(ms, {"r": cols["r"][:2]}, 2) == (verdict, None)
+
+
 @pytest.mark.parametrize("sentence", [
     "the sw shall always satisfy persisted(3, p) -> q",
     "the sw shall always satisfy occurred(2, 4, p) | !q",

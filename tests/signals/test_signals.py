@@ -382,6 +382,22 @@ def test_csv_times_are_exact_ns_and_a_column_is_boolean_or_numeric(tmp_path, mon
 
 
 @pytest.mark.tor("TOR-TCK-007")
+def test_csv_cells_padded_with_white_space_are_read_as_their_values(tmp_path, monkeypatch):
+    """Cells are read stripped of white space, also in a chunk of rows read at once: a column
+    of 1/0 cells, one of them padded, is boolean, and a true/false later in it is no mix."""
+    from fretc.logs.csv import read as csv_read
+
+    p = tmp_path / "t.csv"
+    p.write_text("time,ok\n0,1 \n1,0\n2,1\n")
+    _times, cols = sample_arrays(open_log(p))
+    assert cols["ok"].dtype == np.bool_ and cols["ok"].tolist() == [True, False, True]
+    monkeypatch.setattr(csv_read, "CHUNK_ROWS", 1)
+    p.write_text("time,ok\n0,1 \n1,true\n2, false\n")
+    _times, cols = sample_arrays(open_log(p))
+    assert cols["ok"].tolist() == [True, True, False]
+
+
+@pytest.mark.tor("TOR-TCK-007")
 def test_csv_with_bindings_and_period(tmp_path):
     p = tmp_path / "t.csv"
     p.write_text("speed,stop\n0.2,false\n0.9,false\n0.0,true\n")
