@@ -35,6 +35,7 @@ def _kinds(result):
     return sorted((f.kind, tuple(f.requirements)) for f in result.findings)
 
 
+@pytest.mark.tor("TOR-CHK-002")
 def test_consistent_set_has_no_finding(tmp_path):
     p = _write(tmp_path, "ok.fret",
                "C1: upon p the sw shall within 3 ticks satisfy q\n"
@@ -59,6 +60,7 @@ def test_fret_non_vacuity_example(tmp_path):
     assert [s["satisfiable"] for s in r.requirements] == [True, True]
 
 
+@pytest.mark.tor("TOR-CHK-002")
 def test_conflict_only_in_a_mode(tmp_path):
     # the pair conflicts only inside modeA; a third requirement forces modeA
     p = _write(tmp_path, "modes.fret",
@@ -85,6 +87,7 @@ def test_bounded_timings_within_against_for(tmp_path):
     assert _check(p2).findings == []
 
 
+@pytest.mark.tor("TOR-CHK-002")
 def test_numeric_thresholds_exclude_each_other(tmp_path):
     p = _write(tmp_path, "n.fret",
                "N1: the sw shall always satisfy speed <= 0.5\n"

@@ -217,6 +217,20 @@ def test_witnesses_past_spot_bounds_replay_through_the_audit(tmp_path, text):
             assert f.witness and f.details["witness_shows_finding"] is True
 
 
+@pytest.mark.tor("TOR-CHK-002")
+def test_a_query_past_spot_bounds_outside_the_monitors_is_answered_by_z3(tmp_path):
+    """Past Spot's bounds a query whose atom the monitors' game cannot take (a comparison of
+    two variables) is left by the monitors to z3, which decides it: the conflict is found,
+    not an unknown nor an error."""
+    req = tmp_path / "set.fret"
+    req.write_text("C1: upon p the sw shall within 20 ticks satisfy x > y\n"
+                   "C2: the sw shall always satisfy !(x > y)\n"
+                   "C3: the sw shall immediately satisfy p\n", encoding="utf-8")
+    r = _run(req, "auto")
+    assert [(f.kind, f.subsets) for f in r.findings] == [("conflict", [["C1", "C2", "C3"]])]
+    assert r.smt_queries > 0 and r.monitor_queries == 0
+
+
 def test_safe_ros_requirements_at_50_hz(tmp_path):
     """The Safe-ROS set at 50 Hz ("within 1 second" = 50 ticks) is checked: no finding."""
     for src in (ROOT / "requirements").glob("*.fret"):
