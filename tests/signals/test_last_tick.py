@@ -17,7 +17,7 @@ from click.testing import CliRunner
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from _logs import MS, float64, write_mcap
+from _logs import MS, float64, twist_stamped, write_mcap
 from fretc.audit import AuditConfig, audit_log, load_plan
 from fretc.cli import main
 from fretc.logs import open_log
@@ -192,3 +192,18 @@ def test_a_topic_silent_to_the_end_of_the_log_is_stale_there(tmp_path):
     assert by["S"].verdict == "violated" and by["S"].first_violation.at.tick == 33, by["S"]
     assert by["S"].last_tick_ns == 10_000 * MS  # the grid tick at or after the log's end (9.901 s)
     assert by["V"].verdict == "satisfied" and by["V"].last_tick_ns == 2_900 * MS
+
+
+@pytest.mark.tor("TOR-TCK-006")
+def test_age_on_header_stamps_ticks_to_the_last_stamp_not_the_log_end(tmp_path):
+    """The log's end is a log time: a clock on header stamps (here a simulation's clock from
+    0, logged at wall-clock times) ticks to its topics' last stamp, whatever the log's end
+    on the other clock; taking it there would make billions of ticks."""
+    wall = 1_700_000_000 * 10**9
+    msgs = [("/scan", "geometry_msgs/msg/TwistStamped", wall + k * 100 * MS,
+             twist_stamped(k * 100 * MS, x=1.0)) for k in range(30)]
+    log = write_mcap(tmp_path / "sim.mcap", msgs)
+    v = _verdict(tmp_path, "@tick_period 100 ms\nS: the lidar shall always satisfy !stale\n",
+                 '[tick]\nperiod = "100 ms"\ntime = "header"\n[variables]\n'
+                 'stale = "age(/scan) > 0.3"\n', log)
+    assert v.verdict == "satisfied" and v.last_tick_ns == 2_900 * MS, v

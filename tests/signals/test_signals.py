@@ -192,6 +192,22 @@ def test_header_time_base_reorders_and_reports(tmp_path):
     assert s.signal_problems == []
 
 
+@pytest.mark.tor("TOR-TCK-009")
+def test_the_tick_bound_counts_the_ticks_already_made(tmp_path):
+    """A header stamp that jumps 10^8 periods after a tick was made gives more than 10^8
+    ticks in all: an error raised before the grid's ticks are made, though the jump alone
+    is at the limit (the log times, 2 ns apart, let it through)."""
+    from itertools import islice
+
+    msgs = [("/cmd", "geometry_msgs/msg/TwistStamped", lt, twist_stamped(hs, x=1.0))
+            for lt, hs in ((0, 0), (1, 1), (2, 1 + 10**8))]
+    log = write_mcap(tmp_path / "jump.mcap", msgs)
+    b = parse_bindings('[tick]\nperiod = "1 ns"\ntime = "header"\nheader_lag = "1 ns"\n'
+                       '[variables]\nx = "/cmd.twist.linear.x > 0"\n')
+    with pytest.raises(SignalError, match=r"more than 100,000,000 ticks .* header\.stamp jump"):
+        list(islice(sample(open_log(log), b), 100))
+
+
 def test_header_time_base_needs_headers(tmp_path):
     src = open_log(_ab_log(tmp_path))
     b = parse_bindings('[tick]\nperiod = "1 s"\ntime = "header"\n[variables]\nav = "/a.data"\n', "h.toml")
