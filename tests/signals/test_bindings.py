@@ -232,6 +232,25 @@ def test_three_valued_is_the_same_per_tick_and_vectorized(xs, ys, expr):
     assert np.array_equal(vec, want, equal_nan=True), (expr, xs, ys)
 
 
+@pytest.mark.tor("TOR-DMG-004", "TOR-VER-004")
+def test_any_and_all_over_arrays_of_many_ticks_are_unknown_only_where_an_item_is():
+    """``any``/``all`` of an array field read over many ticks at once (the vectorized
+    evaluator): a tick is unknown only when its own items leave it undecided, whatever an
+    item of another tick; the values are the per-tick evaluator's."""
+    arrays = [[1.0, math.nan], [1.0, 2.0], [0.1, math.nan], [3.0, 4.0]]
+    messages = [NS(arr=np.array(a)) for a in arrays]
+    idx = np.arange(len(messages), dtype=np.int64)
+    cols = HeldColumns(MessageColumns({"/a": messages}), idx, {"/a": idx}, {"/a": idx})
+    for expr, want in [("any(/a.arr < 0.5)", [math.nan, 0.0, 1.0, 0.0]),
+                       ("all(/a.arr < 5)", [math.nan, 1.0, math.nan, 1.0])]:
+        b = compile_expression("v", expr)
+        with np.errstate(all="ignore"):
+            vec = np.asarray(b.evaluate_columns(cols), dtype=np.float64)
+        per_tick = [ev(expr, {"/a": m}) for m in messages]
+        assert np.array_equal(vec, np.array(want), equal_nan=True), (expr, vec)
+        assert np.array_equal(np.array(per_tick, dtype=np.float64), vec, equal_nan=True), expr
+
+
 def test_indexing_norm_len_and_arrays():
     m = {"/v": NS(items=[NS(p=1.0), NS(p=2.0), NS(p=5.0)], arr=np.array([3.0, -4.0, 12.0]))}
     assert ev("/v.items[0].p + /v.items[-1].p", m) == 6.0
