@@ -103,6 +103,11 @@ AREAS: tuple[Area, ...] = (
     # (TOR-LOG-003), and the robustness (TOR-VER-007)
     Area("judge", "Verdicts", ("monitors/judge.py",),
          (*_ids("VER", 1, 2, 3, 4, 7, 9), "TOR-LOG-003")),
+    # Kleene's reading of the pt formula over unknown ticks (a gap, NaN) and the LTL3 verdict
+    # over every letter an unknown tick may be: the damage's verdicts (TOR-DMG-002, 004) by
+    # the three-valued rule (TOR-VER-004)
+    Area("damage", "Damage and gaps", ("monitors/three_valued.py",),
+         (*_ids("DMG", 2, 4), "TOR-VER-004")),
     Area("verdict-words", "Verdicts",
          ("audit/verdict.py::Verdict", "audit/verdict.py::incomplete",
           "audit/verdict.py::summary", "audit/verdict.py::exit_code"),
