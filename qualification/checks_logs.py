@@ -1,7 +1,8 @@
 """The validation suite's checks on recorded logs: MCAP files written here by the ``mcap``
 and ``rosbags`` libraries (not by fretc), audited by ``fretc audit`` with bindings, against
 the tick rules (docs/guide/ticks.md), damage (docs/guide/audits.md) and REP 117's LaserScan
-readings (docs/bindings.md).
+readings (docs/bindings.md); and a CSV trace still being written while it is audited
+(docs/guide/audits.md, Long CSV traces).
 """
 
 from __future__ import annotations
@@ -171,6 +172,67 @@ def check_blind_lidar(run: Run) -> list[str]:
     return out
 
 
+def check_csv_extent(run: Run) -> list[str]:
+    """A CSV trace still being written during ``fretc audit`` (1000 rows, 1 s apart; rows
+    appended once the first read is over, before the second: a logger going on) is judged
+    over the bytes the first read found: R1 streamed and satisfied, R2 (a NaN at its first
+    row: judged whole, from a second read) unknown, R3 streamed and violated at row 500
+    (its values shown from a read again), each over 1000 rows to the same last tick
+    (999 s), though the rows appended would violate R2 and R3 and double the ticks
+    (docs/guide/audits.md, Long CSV traces)."""
+    from fretc.audit import streamed
+
+    folder = run.work / "extent"
+    folder.mkdir(parents=True, exist_ok=True)
+    req = folder / "r.fret"
+    req.write_text("R1: the s shall always satisfy x <= 1\nR2: the s shall always satisfy y <= 1\n"
+                   "R3: the s shall always satisfy z <= 1\n", encoding="utf-8")
+    rows = ["x,y,z", "0,nan,0"] + ["0,0,0"] * 999
+    rows[501] = "0,0,7"
+    log = folder / "growing.csv"
+    log.write_text("\n".join(rows) + "\n", encoding="ascii")
+    size = log.stat().st_size
+    sizes: list[int] = []
+    close = streamed.CsvStreams.close
+
+    def close_then_grow(self: Any, source: Any) -> None:
+        close(self, source)
+        sizes.append(log.stat().st_size)
+        with open(log, "a", encoding="ascii") as f:
+            f.write("5,5,5\n" * 1000)
+
+    jpath = folder / "audit.json"
+    streamed.CsvStreams.close = close_then_grow  # type: ignore[method-assign]
+    try:
+        code, text = fretc(run, ["audit", "-r", str(req), str(log), "--json", str(jpath),
+                                 "--no-progress"])
+    finally:
+        streamed.CsvStreams.close = close  # type: ignore[method-assign]
+    if sizes != [size]:
+        return [f"the trace's sizes at the end of the first read {sizes}, expected [{size}] "
+                "(the audit did not read it as it streams a CSV trace)"]
+    doc = json.loads(jpath.read_text("utf-8")) if jpath.exists() else None
+    got = {rid: v for (_, rid), v in verdicts(doc).items()}
+    said = tuple((got.get(r, {}).get("verdict"), got.get(r, {}).get("ticks_evaluated"),
+                  got.get(r, {}).get("last_tick_ns")) for r in ("R1", "R2", "R3"))
+    want = (("satisfied", 1000, 999 * S), ("unknown", 1000, 999 * S),
+            ("violated", 1000, 999 * S))
+    out = []
+    if (code, said) != (1, want):
+        out.append(f"(exit, (verdict, ticks, last tick) of R1, R2, R3) = {(code, said)}, "
+                   f"expected {(1, want)}: {text.strip()[-200:]}")
+    fv = got.get("R3", {}).get("first_violation") or {}
+    if fv.get("tick") != 500:
+        out.append(f"R3's first violation at tick {fv.get('tick')}, expected 500")
+    shown = {x.get("tick"): x.get("value") for x in
+             (got.get("R3", {}).get("values") or {}).get("z", [])}
+    if not shown or max(t for t in shown if t is not None) >= 1000 or shown.get(500) != 7.0:
+        out.append("R3's values shown around its violation are not the first extent's rows "
+                   f"(z at tick 500: {shown.get(500)}, expected 7.0; ticks up to "
+                   f"{max((t for t in shown if t is not None), default=None)}, expected < 1000)")
+    return out
+
+
 #: the checks on MCAP logs, in the order they run
 CHECKS: tuple[Check, ...] = (
     Check("mcap-ticks", ("TOR-TCK-002", "TOR-TCK-003", "TOR-LOG-001"),
@@ -181,4 +243,7 @@ CHECKS: tuple[Check, ...] = (
           "an MCAP log cut short: partial, damage listed, exit 3", check_mcap_damage),
     Check("lidar-rep117", ("TOR-BND-002",),
           "a blind LiDAR is unknown, a LiDAR without return clear", check_blind_lidar),
+    Check("csv-extent", ("TOR-LOG-002",),
+          "a CSV trace growing during its audit: every requirement over one extent",
+          check_csv_extent),
 )

@@ -1,7 +1,9 @@
 """The validation suite's checks of the signals fretc reads from logs, end to end on MCAP
 logs written here by ``mcap`` and ``rosbags``: a topic's age to the log's end, the messages
 between ticks, the bindings checked against the schemas, the limits on ticks and on a
-chunk's size (docs/guide/ticks.md, docs/bindings.md, docs/guide/audits.md).
+chunk's size, and entity keys read exactly in MCAP's four message encodings (written here
+by ``rosbags``, ``json``, ``cbor2`` and ``protobuf``) (docs/guide/ticks.md,
+docs/bindings.md, docs/guide/audits.md).
 """
 
 from __future__ import annotations
@@ -275,6 +277,142 @@ def check_windows(run: Run) -> list[str]:
     return out
 
 
+#: the ids of the entity keys check: a float64 merges 2**53 with 2**53 + 1 and 2**64 - 2
+#: with 2**64 - 1 (2**53 - 1 and 2**53 are two doubles, the control); GHOST rides only in
+#: the messages between ticks
+KEYS = (2**53 - 1, 2**53, 2**53 + 1, 2**64 - 2, 2**64 - 1)
+VIOLATORS = (2**53 + 1, 2**64 - 1)
+GHOST = 2**60 + 3
+TRACK_MSG = "uint64 id\nfloat64 distance"
+#: the entity bindings of the check (tests/_logs.py's tracks): each track's distance, and
+#: the track present where it is in the message held at the tick
+TRACK_BINDINGS = ('[tick]\nperiod = "100 ms"\n[entities]\ntrack = "/tracks.tracks[:].id"\n'
+                  '[variables]\ndist = \'min(/tracks.tracks[:]{id==$track}.distance)\'\n'
+                  "present = 'count(/tracks.tracks[:]{id==$track}.distance >= 0) = 1'\n")
+
+
+def _tracks(k: int) -> list[dict[str, Any]]:
+    """The tracks of message ``k`` (every 50 ms from 1 s): the five keys 2 m away, the
+    violators 0.2 m at k = 6 (the tick at 1.3 s), the ghost in the odd messages alone
+    (between ticks: the last message, at the last tick, is even)."""
+    out = [{"id": i, "distance": 0.2 if k == 6 and i in VIOLATORS else 2.0} for i in KEYS]
+    return out + ([{"id": GHOST, "distance": 2.0}] if k % 2 else [])
+
+
+def _track_payloads(encoding: str) -> tuple[tuple[str, str, bytes], list[bytes]]:
+    """``/tracks`` (``trk64/msg/TrackArray`` of ``uint64 id``, ``float64 distance``) in
+    ``encoding`` (cdr by rosbags, json with a JSON Schema, cbor without schema, protobuf
+    with a ``FileDescriptorSet``): ((schema name, schema encoding, schema bytes), the thirteen
+    messages' bytes). The ids are written as the integers they are, by the libraries."""
+    docs = [{"tracks": _tracks(k)} for k in range(13)]
+    if encoding == "cdr":
+        import numpy as np
+        from rosbags.typesys import Stores, get_typestore, get_types_from_msg
+
+        store = get_typestore(Stores.ROS2_HUMBLE)
+        store.register(get_types_from_msg(TRACK_MSG, "trk64/msg/Track"))
+        store.register(get_types_from_msg("trk64/Track[] tracks", "trk64/msg/TrackArray"))
+        T = store.types
+
+        def cdr(doc: dict[str, Any]) -> bytes:
+            msg = T["trk64/msg/TrackArray"](tracks=[
+                T["trk64/msg/Track"](id=np.uint64(t["id"]), distance=t["distance"])
+                for t in doc["tracks"]])
+            return bytes(store.serialize_cdr(msg, "trk64/msg/TrackArray"))
+        text = f"trk64/Track[] tracks\n{'=' * 80}\nMSG: trk64/Track\n{TRACK_MSG}\n"
+        return ("trk64/msg/TrackArray", "ros2msg", text.encode()), [cdr(d) for d in docs]
+    if encoding == "json":
+        schema = {"type": "object", "title": "trk64/msg/TrackArray", "properties": {
+            "tracks": {"type": "array", "items": {"type": "object", "properties": {
+                "id": {"type": "integer"}, "distance": {"type": "number"}}}}}}
+        return (("trk64/msg/TrackArray", "jsonschema", json.dumps(schema).encode()),
+                [json.dumps(d).encode() for d in docs])
+    if encoding == "cbor":
+        import cbor2
+
+        return ("", "", b""), [cbor2.dumps(d) for d in docs]
+    from google.protobuf import descriptor_pb2, descriptor_pool, message_factory
+
+    f = descriptor_pb2.FileDescriptorProto(name="trk64/msg.proto", package="trk64.msg",
+                                           syntax="proto3")
+    track = f.message_type.add(name="Track")
+    track.field.add(name="id", number=1, type=4, label=1)  # TYPE_UINT64
+    track.field.add(name="distance", number=2, type=1, label=1)  # TYPE_DOUBLE
+    f.message_type.add(name="TrackArray").field.add(
+        name="tracks", number=1, type=11, label=3, type_name=".trk64.msg.Track")
+    fds = descriptor_pb2.FileDescriptorSet(file=[f])
+    pool = descriptor_pool.DescriptorPool()
+    pool.Add(f)
+    Arr = message_factory.GetMessageClass(pool.FindMessageTypeByName("trk64.msg.TrackArray"))
+
+    def pb(doc: dict[str, Any]) -> bytes:
+        msg: Any = Arr()
+        for t in doc["tracks"]:
+            item = msg.tracks.add()
+            item.id, item.distance = t["id"], t["distance"]
+        return bytes(msg.SerializeToString())
+    return (("trk64.msg.TrackArray", "protobuf", fds.SerializeToString()),
+            [pb(d) for d in docs])
+
+
+def _track_log(path: Path, encoding: str) -> None:
+    """An MCAP of the thirteen ``/tracks`` messages (every 50 ms from 1 s to 1.6 s) in
+    ``encoding``."""
+    from mcap.writer import Writer
+
+    (name, schema_encoding, data), payloads = _track_payloads(encoding)
+    with open(path, "wb") as f:
+        w = Writer(f)
+        w.start(profile="ros2" if encoding == "cdr" else "", library="fretc-qualify")
+        sid = w.register_schema(name, schema_encoding, data) if name else 0
+        cid = w.register_channel("/tracks", encoding, sid)
+        for k, payload in enumerate(payloads):
+            t = S + k * 50 * MS
+            w.add_message(cid, log_time=t, data=payload, publish_time=t, sequence=k)
+        w.finish()
+
+
+def check_entity_keys(run: Run) -> list[str]:
+    """uint64 entity keys past 2**53 (2**53 and 2**53 + 1, 2**64 - 2 and 2**64 - 1: one
+    double each pair) in ROS 2 CDR, JSON, CBOR and protobuf MCAP logs written here: each id
+    is its own entity named exactly, the violators (0.2 m at 1.3 s) violated there, the
+    others satisfied, the requirement violated (exit 1); a track carried only by the
+    messages between ticks is read at no tick: ``unknown`` with that reason, never
+    satisfied (docs/bindings.md, One verdict per entity)."""
+    req = "@tick_period 100 ms\nT: in present mode the robot shall always satisfy dist > 0.5\n"
+    want = {f"T[track={i}]": "violated" if i in VIOLATORS else "satisfied" for i in KEYS}
+    want[f"T[track={GHOST}]"] = "unknown"
+    want["T"] = "violated"
+    out = []
+    for encoding in ("cdr", "json", "cbor", "protobuf"):
+        folder = run.work / f"keys-{encoding}"
+        folder.mkdir(parents=True, exist_ok=True)
+        log = folder / f"tracks-{encoding}.mcap"
+        _track_log(log, encoding)
+        (folder / "t.fret").write_text(req, encoding="utf-8")
+        (folder / "t.bindings.toml").write_text(TRACK_BINDINGS, encoding="utf-8")
+        jpath = folder / "audit.json"
+        code, text = fretc(run, ["audit", "-r", str(folder / "t.fret"), str(log), "--json",
+                                 str(jpath), "--no-progress"])
+        doc = json.loads(jpath.read_text("utf-8")) if jpath.exists() else None
+        got = {rid: v for (_, rid), v in verdicts(doc).items()}
+        said = {rid: v.get("verdict") for rid, v in got.items()}
+        if said != want or code != 1:
+            out.append(f"{encoding}: exit {code}, verdicts {said}; expected exit 1, {want}: "
+                       f"{text.strip()[-200:]}")
+            continue
+        for i in VIOLATORS:
+            fv = (got[f"T[track={i}]"].get("first_violation") or {}).get("tick_time_ns")
+            if fv != S + 300 * MS:
+                out.append(f"{encoding}: track {i} first violated at {fv} ns, expected "
+                           f"{S + 300 * MS} (1.3 s)")
+        reason = str(got[f"T[track={GHOST}]"].get("unknown_reason") or "")
+        if "read at no tick" not in reason:
+            out.append(f"{encoding}: the track read at no tick is unknown for {reason!r}, "
+                       "expected 'read at no tick'")
+    return out
+
+
 #: the checks of the signals and the logs' limits, in the order they run
 CHECKS: tuple[Check, ...] = (
     Check("signals-age", ("TOR-TCK-006",),
@@ -295,4 +433,7 @@ CHECKS: tuple[Check, ...] = (
           "a damaged chunk is a gap: unknown, never held, but bridged", check_gaps),
     Check("mcap-chunk-cap", ("TOR-DMG-005",),
           "a chunk expanding past the cap is damage", check_chunk_cap),
+    Check("bindings-entity-keys", ("TOR-BND-003",),
+          "uint64 entity keys past 2^53 exact in four encodings; a track read at no tick "
+          "unknown", check_entity_keys),
 )

@@ -5,10 +5,10 @@ by a broken one and puts the original back on exit, whatever happens inside.
 The faults stand for the defects a qualification must show the suite would notice (IEC
 61508-3 7.4.4.5 asks how a tool can fail; a suite that no fault makes fail shows nothing):
 in the grammar, FRET's semantics as the judge applies it, the formulas and their printer,
-durations, the tick rules, windows and folds of the signals, the CSV and MCAP readers, the
-audit's verdict words and statistics, the Python, C and AJPF generators, the shield's
-Python form and the output files (the failure analysis, docs/qualification/, maps each
-to the failure it stands for).
+durations, the tick rules, windows and folds of the signals, entity keys, the CSV and MCAP
+readers, the audit's verdict words and statistics, the Python, C and AJPF generators, the
+shield's Python form, the output files and the gaps of ``fretc watch`` (the failure
+analysis, docs/qualification/, maps each to the failure it stands for).
 ``FRETC_QUALIFY_SEED_FAULT=NAME`` seeds one of them for a whole run of ``fretc qualify``
 (:func:`fretc.qualification.suite.qualify`): the test that the suite fails then, naming the
 requirement, stands for an installation with that defect.
@@ -330,6 +330,64 @@ def _shield_pass_fault() -> Iterator[None]:
         yield
 
 
+@contextlib.contextmanager
+def _entity_key_fault() -> Iterator[None]:
+    """An entity's integer key is read through a float64 (two uint64 ids past 2**53 that
+    one double holds are one entity), by the key's binding and by the fast key reader."""
+    from fretc.audit.entities import rows
+    from fretc.signals.bindings import extract
+
+    def double(v: Any) -> Any:
+        return float(v) if type(v) is int else v
+
+    def one(original: Any) -> Any:
+        return lambda v: double(original(v))
+
+    def call(original: Any) -> Any:
+        def broken(self: Any, data: Any) -> Any:
+            keys = original(self, data)
+            return None if keys is None else [double(v) for v in keys]
+        return broken
+
+    def batch(original: Any) -> Any:
+        def broken(self: Any, datas: Any) -> Any:
+            got = original(self, datas)
+            return None if got is None else ([double(v) for v in got[0]], got[1])
+        return broken
+
+    with _wrapped(extract, "entity_key", one), _wrapped(rows, "entity_key", one), \
+            _wrapped(rows.KeyReader, "__call__", call), _wrapped(rows.KeyReader, "batch", batch):
+        yield
+
+
+@contextlib.contextmanager
+def _watch_gap_fault() -> Iterator[None]:
+    """The watch forgets the gaps of a lost connection, an overflowing queue and an
+    undecodable message when it judges the run and records it: the values read before a
+    gap are held over it."""
+    from fretc.live import absence, watch
+
+    def wrap(original: Any) -> Any:
+        return lambda src: [g for g in original(src) if g.cause != "connection_gap"]
+
+    with _wrapped(absence, "run_gaps", wrap), _wrapped(watch, "run_gaps", wrap):
+        yield
+
+
+@contextlib.contextmanager
+def _csv_extent_fault() -> Iterator[None]:
+    """Each read of a CSV trace reads the file as it is then (the extent of the audit's
+    first read not passed on): a trace still being written is judged over more rows by
+    the later reads."""
+    from fretc.logs.csv.source import CsvSource
+
+    def wrap(original: Any) -> Any:
+        return lambda self, *args, **kwargs: original(self, *args, **{**kwargs, "extent": None})
+
+    with _wrapped(CsvSource, "__init__", wrap):
+        yield
+
+
 #: the faults of the mutation run, by name
 FAULTS: dict[str, Fault] = {f.name: f for f in (
     Fault("semantics-trigger", "fretc.monitors.interval (the audit's judge)",
@@ -393,4 +451,13 @@ FAULTS: dict[str, Fault] = {f.name: f for f in (
     Fault("shield-passes", "fretc.shield.emit_python (the shield's Python form)",
           "every proposal is passed on, corrections included", _shield_pass_fault,
           first=("shield-python",)),
+    Fault("entity-keys-double", "fretc.signals.bindings.extract (entity keys)",
+          "an integer entity key is read through a float64", _entity_key_fault,
+          first=("bindings-entity-keys",)),
+    Fault("watch-gap-held", "fretc.live.absence (the watched run's gaps)",
+          "the values read before a watch's lost messages are held over them", _watch_gap_fault,
+          first=("watch-gaps",)),
+    Fault("reader-csv-extent", "fretc.logs.csv.source (the CSV reader)",
+          "each read of a CSV trace still being written reads its size then",
+          _csv_extent_fault, first=("csv-extent",)),
 )}

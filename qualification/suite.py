@@ -22,7 +22,7 @@ from typing import Any
 
 from fretc.qualification import checks as checks_module
 from fretc.qualification import (checks_audit, checks_forms, checks_logs, checks_robot,
-                                 checks_signals, checks_tools)
+                                 checks_signals, checks_tools, checks_watch)
 from fretc.qualification.catalogue import load_requirements
 from fretc.qualification.checks import Check, CheckSkipped, Run
 from fretc.qualification.faults import FAULTS
@@ -30,7 +30,8 @@ from fretc.qualification.faults import FAULTS
 #: every check of the suite, in the order it runs
 CHECKS: tuple[Check, ...] = (checks_module.CHECKS + checks_audit.CHECKS + checks_logs.CHECKS
                              + checks_signals.CHECKS + checks_forms.CHECKS
-                             + checks_robot.CHECKS + checks_tools.CHECKS)
+                             + checks_robot.CHECKS + checks_tools.CHECKS
+                             + checks_watch.CHECKS)
 #: the environment variable that seeds a fault for a whole run (a test's way to stand for a
 #: broken installation; its value a name of :data:`fretc.qualification.faults.FAULTS`)
 SEED_VARIABLE = "FRETC_QUALIFY_SEED_FAULT"

@@ -6,6 +6,7 @@ a bad DIR before writing anything."""
 from __future__ import annotations
 
 import importlib.metadata
+import importlib.util
 import json
 import os
 import subprocess
@@ -53,6 +54,11 @@ def test_qualify_passes_on_this_installation_and_writes_only_its_folder(tmp_path
     # R2U2's C2PO: shown by the traced tests where R2U2 is built (tools/r2u2/build.sh), no
     # check of qualify's
     assert results["TOR-GEN-006"] == "not checked here"
+    # entity keys, a growing CSV trace and the watch's lost messages: shown everywhere; the
+    # watch against the audit where the watch extra is installed (a served log)
+    assert {results[i] for i in ("TOR-BND-003", "TOR-LOG-002", "TOR-WCH-002")} == {"passed"}
+    served = all(importlib.util.find_spec(m) for m in ("foxglove", "websockets"))
+    assert results["TOR-WCH-001"] == ("passed" if served else "not checked here")
     # on site: every T3 requirement but those needing a ROS 2 graph, AJPF or R2U2 shown, and
     # at least 90 % of all (the kit's figure, docs/qualification/index.md)
     from fretc.qualification.catalogue import load_requirements
