@@ -331,6 +331,50 @@ def _shield_pass_fault() -> Iterator[None]:
 
 
 @contextlib.contextmanager
+def _ros2_forward_fault() -> Iterator[None]:
+    """The shield's ROS 2 node answers a proposal heard between ticks with the proposal
+    itself, not the shield's decision (a command no shield vetted on the bus)."""
+    from fretc.shield import emit_ros2
+
+    def wrap(original: Any) -> Any:
+        def broken(*args: Any, **kwargs: Any) -> str:
+            text: str = original(*args, **kwargs)
+            return text.replace(
+                "decision, messages = self.shield.answer(t)",
+                "decision, messages = self.shield.answer(t)\n            messages = "
+                "[(c, self.shield.proposed.get(c, m)) for c, m in messages]")
+        return broken
+
+    with _wrapped(emit_ros2, "node_source", wrap):
+        yield
+
+
+@contextlib.contextmanager
+def _gwendolen_latch_fault() -> Iterator[None]:
+    """The Gwendolen agent's Java machine latches its first output atom: once decided
+    true it stays true (the stop never released)."""
+    from fretc.shield import emit_gwendolen
+
+    def latched(java: str) -> str:
+        return java.replace(
+            "        return new int[][] {out, next, {broken ? 1 : 0}};",
+            "        LATCH = LATCH || out[0] == 1;\n        out[0] = LATCH ? 1 : out[0];\n"
+            "        return new int[][] {out, next, {broken ? 1 : 0}};").replace(
+            "    public static void main(", "    static boolean LATCH = false;\n\n"
+            "    public static void main(")
+
+    def wrap(original: Any) -> Any:
+        def broken(*args: Any, **kwargs: Any) -> dict[str, str]:
+            files: dict[str, str] = original(*args, **kwargs)
+            return {name: latched(text) if name.endswith("_shield.java") else text
+                    for name, text in files.items()}
+        return broken
+
+    with _wrapped(emit_gwendolen, "render_gwendolen", wrap):
+        yield
+
+
+@contextlib.contextmanager
 def _entity_key_fault() -> Iterator[None]:
     """An entity's integer key is read through a float64 (two uint64 ids past 2**53 that
     one double holds are one entity), by the key's binding and by the fast key reader."""
@@ -451,6 +495,12 @@ FAULTS: dict[str, Fault] = {f.name: f for f in (
     Fault("shield-passes", "fretc.shield.emit_python (the shield's Python form)",
           "every proposal is passed on, corrections included", _shield_pass_fault,
           first=("shield-python",)),
+    Fault("ros2-proposal-forwarded", "fretc.shield.emit_ros2 (the shield's ROS 2 node)",
+          "a proposal heard between ticks is published as proposed, not as decided",
+          _ros2_forward_fault, first=("shield-ros2",)),
+    Fault("gwendolen-latch", "fretc.shield.emit_gwendolen (the Gwendolen agent's machine)",
+          "the agent's machine holds its first output true once it was decided true",
+          _gwendolen_latch_fault, first=("shield-gwendolen",)),
     Fault("entity-keys-double", "fretc.signals.bindings.extract (entity keys)",
           "an integer entity key is read through a float64", _entity_key_fault,
           first=("bindings-entity-keys",)),

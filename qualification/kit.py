@@ -119,7 +119,8 @@ def summary_lines(q: Qualified) -> tuple[list[str], list[str]]:
     not detect go to standard error."""
     reqs = q.doc["requirements"]
     count = {k: sum(r["result"] == k for r in reqs)
-             for k in ("passed", "failed", "not checked here", "not verified")}
+             for k in ("passed", "failed", "partly checked here", "not checked here",
+                       "not verified")}
     killed = sum(m["killed"] for m in q.doc["mutants"])
     fretc_doc = q.doc["environment"]["fretc"]
     out = [f"fretc qualify: fretc {fretc_doc['version']}"
@@ -131,6 +132,8 @@ def summary_lines(q: Qualified) -> tuple[list[str], list[str]]:
            + "".join(f", {c.check.name} skipped ({c.skipped})" for c in q.outcome.checks
                      if not c.ran) + "; "
            f"requirements: {count['passed']} passed, {count['failed']} failed, "
+           + (f"{count['partly checked here']} partly checked here (a check of theirs "
+              "skipped), " if count["partly checked here"] else "") +
            f"{count['not checked here']} not checked here (shown by the project's tests), "
            f"{count['not verified']} not verified (the requirements page says why)",
            f"mutation run: {killed} of {len(q.doc['mutants'])} seeded faults detected"

@@ -87,7 +87,9 @@ def html_page(doc: dict[str, Any]) -> str:
                      f"{_e(', '.join(doc['failed_requirements']))}</p>")
     parts += ["<h2>Requirements</h2>",
               _table(["id", "result", "checks", "statement", "failures"],
-                     [[r["id"], r["result"], ", ".join(r["checks"]), r["statement"],
+                     [[r["id"], r["result"], ", ".join(r["checks"]) + "".join(
+                         f", {name} (skipped)" for name in r.get("skipped", ())),
+                       r["statement"],
                        "; ".join(r["failures"])] for r in doc["requirements"]]),
               "<h2>Checks</h2>",
               _table(["check", "result", "requirements", "what", "seconds", "failures"],

@@ -22,7 +22,7 @@ from typing import Any
 
 from fretc.qualification import checks as checks_module
 from fretc.qualification import (checks_audit, checks_forms, checks_logs, checks_robot,
-                                 checks_signals, checks_tools, checks_watch)
+                                 checks_shield, checks_signals, checks_tools, checks_watch)
 from fretc.qualification.catalogue import load_requirements
 from fretc.qualification.checks import Check, CheckSkipped, Run
 from fretc.qualification.faults import FAULTS
@@ -30,8 +30,8 @@ from fretc.qualification.faults import FAULTS
 #: every check of the suite, in the order it runs
 CHECKS: tuple[Check, ...] = (checks_module.CHECKS + checks_audit.CHECKS + checks_logs.CHECKS
                              + checks_signals.CHECKS + checks_forms.CHECKS
-                             + checks_robot.CHECKS + checks_tools.CHECKS
-                             + checks_watch.CHECKS)
+                             + checks_robot.CHECKS + checks_shield.CHECKS
+                             + checks_tools.CHECKS + checks_watch.CHECKS)
 #: the environment variable that seeds a fault for a whole run (a test's way to stand for a
 #: broken installation; its value a name of :data:`fretc.qualification.faults.FAULTS`)
 SEED_VARIABLE = "FRETC_QUALIFY_SEED_FAULT"
@@ -76,20 +76,24 @@ class Outcome:
 
     def requirement_results(self) -> list[dict[str, Any]]:
         """Per requirement of ``requirements.toml``, in its order: ``id``, ``area``,
-        ``statement``, ``source``, ``result`` (``passed``, ``failed``, ``not checked here``:
-        the project's tests show it, or ``not verified``: the requirements file says why no
-        test does, ``not_verified``), ``checks`` (the names of those that show it) and
-        ``failures``."""
+        ``statement``, ``source``, ``result`` (``passed``; ``failed``; ``partly checked
+        here``: the checks that ran passed, others were skipped; ``not checked here``: the
+        project's tests show it; or ``not verified``: the requirements file says why no test
+        does, ``not_verified``), ``checks`` (the names of those that ran), ``skipped`` (of
+        those that could not run here) and ``failures``."""
         out = []
         for req in load_requirements():
             mine = [r for r in self.checks if req.id in r.check.tors and r.ran]
+            skipped = [r.check.name for r in self.checks
+                       if req.id in r.check.tors and not r.ran]
             failed = [r for r in mine if not r.passed]
-            result = (("failed" if failed else "passed") if mine else
+            result = (("failed" if failed else "partly checked here" if skipped else "passed")
+                      if mine else
                       "not verified" if req.not_verified else "not checked here")
             out.append({"id": req.id, "area": req.area, "statement": req.statement,
                         "source": req.source, "result": result,
                         "not_verified": req.not_verified,
-                        "checks": [r.check.name for r in mine],
+                        "checks": [r.check.name for r in mine], "skipped": skipped,
                         "failures": [f"{r.check.name}: {f}" for r in failed
                                      for f in r.failures]})
         return out

@@ -35,7 +35,8 @@ def qualify_cmd(output: str, no_mutation: bool, manifest: str | None) -> None:
     Python, the platform, every installed distribution's version and hash, each tool
     operational requirement with its result, and the mutation run (faults seeded in the
     semantics, the tick rules and a log reader, each of which the suite must detect).
-    Takes a minute or two; no network."""
+    Takes a minute or two (AJPF's check, run where AJPF_HOME and AJPF_JAVA name a built
+    MCAPL and a Java 11, minutes more); no network."""
     from fretc.qualification.kit import qualify, summary_lines
 
     # the whole fretc group, as the console script runs it: the end-to-end checks run it
