@@ -99,6 +99,12 @@ AREAS: tuple[Area, ...] = (
     # the module is also the CSV trace's format (TOR-TCK-007)
     Area("log-readers", "Log readers", ("logs/csv/read.py",),
          (*_ids("LOG", 1, 2, 3), "TOR-TCK-007")),
+    # the MCAP reader (chunks through the index or record by record, damage as gaps): the
+    # same messages as the other containers (TOR-LOG-001), damage listed and never the end
+    # (TOR-DMG-001), a chunk's declared size (TOR-DMG-005); TOR-DMG-002's traced tests are
+    # left out (one of them, over CSV rows, takes 48 s)
+    Area("mcap-reader", "Log readers", ("logs/mcap/source.py",),
+         ("TOR-LOG-001", *_ids("DMG", 1, 5))),
     # the module is also the LTL3 verdict (TOR-VER-009), streamed by the CSV audit
     # (TOR-LOG-003), and the robustness (TOR-VER-007)
     Area("judge", "Verdicts", ("monitors/judge.py",),
@@ -114,6 +120,9 @@ AREAS: tuple[Area, ...] = (
          _ids("VER", 1, 2, 3, 5, 6)),
     Area("generation", "Generated monitors", ("compiler/codegen.py",), _ids("GEN", 1, 2, 5)),
     Area("c2po", "Generated monitors", ("compiler/c2po.py",), _ids("GEN", 6)),
+    # the C99 monitors (TOR-GEN-003), also traced by their tests to the pt step and verdict
+    # (TOR-GEN-001) and the escaping of ids and texts (TOR-GEN-005)
+    Area("c-generation", "Generated monitors", ("compiler/c_codegen.py",), _ids("GEN", 1, 3, 5)),
     Area("shield", "Shield", ("shield/build.py",), _ids("SHD", *range(1, 8))),
     Area("check", "fretc check", ("check/checker.py",), _ids("CHK", 1, 2, 3)),
     Area("watch", "fretc watch", ("live/watch.py",), _ids("WCH", 1, 2)),
