@@ -25,6 +25,7 @@ from fretc.qualification import reference as ref
 from fretc.qualification.checks import SEED, Check, CheckSkipped, Run, _capped
 from fretc.qualification.checks_audit import fretc
 from fretc.qualification.checks_forms import SHIELD_KEYS, _folder, _load, shield_command
+from fretc.qualification.ros2_node import GRAPH_WAIT
 
 #: the ROS 2 types of the shield's topics and its proposal (the node ticks on /x)
 SHIELD_ROS2 = ('\n[shield]\nproposals = { "/o" = "/o_proposed" }\ntick = "/x"\n'
@@ -77,11 +78,15 @@ def _node_runs() -> list[list[tuple[str, str, Any, int]]]:
     return runs
 
 
-def _drive(run: Run, package: Path, runs: list[list[tuple[str, str, Any, int]]]
-           ) -> list[list[dict[str, Any]]]:
-    """:func:`fretc.qualification.ros2_node.drive` in a process of its own (a ROS domain
-    of its own, discovery kept on this host), its output parsed. Raises RuntimeError when
-    the process fails."""
+#: the graph run's steps, ``[x, proposed o]`` each held until the node answered: S1 forcing
+#: o, the proposal kept, NaN (the fallback), the proposal kept again
+GRAPH_STEPS: list[list[Any]] = [[9.0, False], [2.0, False], [math.nan, False], [2.0, True]]
+
+
+def _drive(run: Run, package: Path, runs: list[Any], graph: bool = False) -> list[Any]:
+    """:func:`fretc.qualification.ros2_node.drive` (``graph``: its ``on_graph``) in a
+    process of its own (a ROS domain of its own, discovery kept on this host), its output
+    parsed. Raises RuntimeError when the process fails."""
     env = {**os.environ, "ROS_DOMAIN_ID": str(100 + os.getpid() % 100),
            "ROS_AUTOMATIC_DISCOVERY_RANGE": "LOCALHOST", "PYTHONDONTWRITEBYTECODE": "1",
            # (rclpy's log files in the work folder, and Fast DDS without its shared-memory
@@ -89,7 +94,8 @@ def _drive(run: Run, package: Path, runs: list[list[tuple[str, str, Any, int]]]
            "ROS_HOME": str(run.work / "ros"), "ROS_LOG_DIR": str(run.work / "ros" / "log"),
            "FASTDDS_BUILTIN_TRANSPORTS": "UDPv4"}
     got = subprocess.run([sys.executable, "-m", "fretc.qualification.ros2_node",
-                          str(package / "s_shield_ros2"), "s_shield_ros2"],
+                          str(package / "s_shield_ros2"), "s_shield_ros2",
+                          *(["--graph"] if graph else [])],
                          input=json.dumps(runs), capture_output=True, text=True,
                          timeout=NODE_TIMEOUT, env=env, cwd=run.work)
     if got.returncode != 0:
@@ -105,7 +111,9 @@ def check_shield_ros2(run: Run) -> list[str]:
     the base obeys) is the Python form's output; an unreadable value or bytes that are no
     message give an ERROR on /diagnostics (the fallback's message sent at a fault tick), a
     readable tick none; no message ends the node; the commands on the bus keep S1 and S2 by
-    the reference evaluator, unread values read both ways."""
+    the reference evaluator, unread values read both ways. Then the node on a ROS 2 graph
+    (its own publishers and timer, a probe node publishing :data:`GRAPH_STEPS`): what
+    reaches the probe is the Python form's decision and fault (:func:`_judge_graph`)."""
     try:
         import rclpy  # noqa: F401
     except ImportError as exc:
@@ -124,7 +132,33 @@ def check_shield_ros2(run: Run) -> list[str]:
         out += _judge_run(n, events, answers, shield_class(), seen)
     out += [f"the runs have no {what}: they do not show the node's answer to it"
             for what, count in seen.items() if not count]
-    return _capped(out)
+    return _capped(out + _judge_graph(_drive(run, package, GRAPH_STEPS, graph=True),
+                                      shield_class()))
+
+
+def _judge_graph(got: list[dict[str, Any]], shield: Any) -> list[str]:
+    """The graph run (:data:`GRAPH_STEPS`) against the Python form stepped five ticks on
+    each step's values: the node's last three ``/o`` messages are its last output, an ERROR
+    on ``/diagnostics`` exactly where it has a fault, at least a WARN where it overrides."""
+    out = []
+    for (x, proposed), heard in zip(GRAPH_STEPS, got, strict=True):
+        for _ in range(5):
+            d = shield.step({"x": x}, {"o": proposed})
+        want = bool(d.outputs["o"])
+        where = f"on the graph, x = {x}, o proposed {proposed}"
+        if len(heard["o"]) < 3 or len(heard["levels"]) < 3:
+            out.append(f"{where}: the node answered {len(heard['o'])} time(s) on /o and "
+                       f"{len(heard['levels'])} on /diagnostics in "
+                       f"{GRAPH_WAIT:g} s, expected 3")
+        elif set(heard["o"]) != {want}:
+            out.append(f"{where}: /o carried {heard['o']}, the Python form decides {want}")
+        elif d.fault and set(heard["levels"]) != {2} or not d.fault and 2 in heard["levels"]:
+            out.append(f"{where}: /diagnostics levels {heard['levels']}, the Python form's "
+                       f"fault: {d.fault!r}")
+        elif d.overridden and 0 in heard["levels"]:
+            out.append(f"{where}: /diagnostics said OK where the proposal is overridden")
+    return out
+
 
 
 def _judge_run(n: int, events: list[tuple[str, str, Any, int]], answers: list[dict[str, Any]],
