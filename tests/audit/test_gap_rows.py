@@ -138,6 +138,22 @@ def test_traces_one_gap_tick_and_two_disagree_on_are_unknown(plan, tmp_path):
     assert got["S1"][0] == "unknown" and got["S1"][1] >= {"vacuous", "violated"}
 
 
+@pytest.mark.tor("TOR-DMG-002")
+def test_a_previous_value_across_a_gap_row_is_what_every_count_and_filling_gives(tmp_path):
+    """A requirement reading the previous tick's value (``preReal``) across a gap row: the
+    tick after the gap reads a value of the gap's, any value; the verdict is the one every
+    count and filling gives, else unknown (against brute force)."""
+    pre = written_plan(str(tmp_path), "pre.fret",
+                       "P1: the sw shall always satisfy preReal(0, x) <= x | b\n"
+                       "P2: whenever a the sw shall immediately satisfy preReal(0, x) < 3\n")
+    rows = [["0", "1", "0"], ["gap"] * 3, ["0", "0", "4.5"], ["1", "1", "4.5"]]
+    got = _check(pre, tmp_path, rows)
+    assert got["P1"][0] == "unknown" and got["P2"][0] == "violated", got  # (a = 1 at 4.5)
+    rows = [["1", "0", "4.5"], ["gap"] * 3, ["1", "0", "0"], ["0", "1", "0"]]
+    got = _check(pre, tmp_path, rows)
+    assert got["P1"][0] == got["P2"][0] == "unknown", got  # (a = 1 after the gap)
+
+
 def test_a_violation_after_a_gap_row_stays_violated(plan, tmp_path):
     """A requirement that counts ticks is judged across a gap row (it was judged up to it,
     the violation after it hidden as unknown)."""
