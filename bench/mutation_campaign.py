@@ -126,6 +126,16 @@ AREAS: tuple[Area, ...] = (
     Area("shield", "Shield", ("shield/build.py",), _ids("SHD", *range(1, 8))),
     Area("check", "fretc check", ("check/checker.py",), _ids("CHK", 1, 2, 3)),
     Area("watch", "fretc watch", ("live/watch.py",), _ids("WCH", 1, 2)),
+    # the areas of the requirements the ones above leave out: the formulas' printers (ft_inf
+    # in Spot's syntax, FRET's codes for names), AJPF's properties, the statistical verdict,
+    # the obligations open at a cut, the gaps bridged, the output files
+    Area("printers", "FRET semantics", ("compiler/printers.py",), _ids("SEM", 4, 12)),
+    Area("psl", "Generated monitors", ("compiler/ajpf.py",), _ids("GEN", 4)),
+    Area("statistics", "Verdicts", ("audit/fleet/statistics.py",),
+         ("TOR-VER-010", "TOR-SEM-011")),
+    Area("open-obligations", "Damage and gaps", ("monitors/obligations.py",), _ids("DMG", 3)),
+    Area("gap-bridges", "Damage and gaps", ("audit/gaps.py",), _ids("DMG", 6)),
+    Area("outputs", "Outputs", ("common/outputs.py",), _ids("OUT", 1, 2)),
 )
 
 
