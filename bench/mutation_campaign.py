@@ -128,7 +128,8 @@ AREAS: tuple[Area, ...] = (
     Area("watch", "fretc watch", ("live/watch.py",), _ids("WCH", 1, 2)),
     # the areas of the requirements the ones above leave out: the formulas' printers (ft_inf
     # in Spot's syntax, FRET's codes for names), AJPF's properties, the statistical verdict,
-    # the obligations open at a cut, the gaps bridged, the output files
+    # the obligations open at a cut, the gaps bridged, the output files, the audit document's
+    # schema, the kit
     Area("printers", "FRET semantics", ("compiler/printers.py",), _ids("SEM", 4, 12)),
     Area("psl", "Generated monitors", ("compiler/ajpf.py",), _ids("GEN", 4)),
     Area("statistics", "Verdicts", ("audit/fleet/statistics.py",),
@@ -136,6 +137,10 @@ AREAS: tuple[Area, ...] = (
     Area("open-obligations", "Damage and gaps", ("monitors/obligations.py",), _ids("DMG", 3)),
     Area("gap-bridges", "Damage and gaps", ("audit/gaps.py",), _ids("DMG", 6)),
     Area("outputs", "Outputs", ("common/outputs.py",), _ids("OUT", 1, 2)),
+    # the audit document read back by report and export against its JSON Schema
+    Area("audit-json", "Verdicts", ("reports/files.py",), _ids("VER", 8)),
+    # the validation suite's verdict per requirement and its mutation run (the kit itself)
+    Area("kit", "Qualification kit", ("qualification/suite.py",), _ids("QUA", 1)),
 )
 
 
