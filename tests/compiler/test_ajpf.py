@@ -49,6 +49,7 @@ def test_refusals_say_why(text, reason):
         to_ajpf(formalize(parse(text)).ft_inf, "sw", {})
 
 
+@pytest.mark.tor("TOR-GEN-004")
 def test_mapping_makes_percepts_actions_and_named_comparisons(tmp_path):
     m = tmp_path / "map.toml"
     m.write_text('agent = "robot"\n[variables.obstacle]\nkind = "percept"\n'
@@ -61,14 +62,32 @@ def test_mapping_makes_percepts_actions_and_named_comparisons(tmp_path):
     assert lines == ["S_1_a: [] (P(obstacle_seen) -> <> D(robot,stop))", "S_2: [] B(robot,high)"]
 
 
+@pytest.mark.tor("TOR-GEN-004")
 def test_unsupported_requirements_become_comments_and_labels_are_unique():
+    free = compile_entry(SimpleNamespace(  # (a free-form requirement: no FRETish to parse)
+        id="F", text="the robot must not hit anything", source="req.fret", line=1, column=1,
+        rationale=None, parent=None, tick_period=None, requirement=None, error=None, extra={}))
     out = emit_psl([compiled("A", "whenever p sw shall eventually satisfy q"),
                     compiled("A", "upon p sw shall eventually satisfy q"),
-                    compiled("A", "whenever q sw shall eventually satisfy p")])["req"]
+                    compiled("A", "whenever q sw shall eventually satisfy p"),
+                    compiled("A.", "whenever q sw shall eventually satisfy q"), free])["req"]
     labels = [l.split(":")[0] for l in out.splitlines() if not l.startswith("#")]
-    assert labels == ["A", "A_2"]
+    assert labels == ["A", "A_2", "A_"]
+    out = emit_psl([compiled(rid, "whenever p sw shall eventually satisfy q")
+                    for rid in ("A", "A", "A")])["req"]
+    assert [l.split(":")[0] for l in out.splitlines() if not l.startswith("#")] == \
+        ["A", "A_2", "A_3"]
+    out = emit_psl([compiled("A", "upon p sw shall eventually satisfy q"), free])["req"]
     assert "# A: upon p sw shall eventually satisfy q" in out
-    assert "no AJPF property" in out
+    assert "#   no AJPF property: AJPF has no next operator" in out
+    assert "# F: the robot must not hit anything\n#   not formalized: " in out
+
+
+@pytest.mark.tor("TOR-GEN-004")
+def test_release_keeps_its_operands_in_order():
+    """FRET's ``before`` is a release (V): its left operand the one that releases."""
+    f = formalize(parse("the sw shall before s satisfy r")).ft_inf
+    assert to_ajpf(f, "ag", {}) == "(B(ag,r) R ~B(ag,s))"
 
 
 def _ajpf_read(text: str) -> list[tuple[str, str]]:
