@@ -142,7 +142,7 @@ H3: agent shall always satisfy ok
 @pytest.mark.parametrize("values, want", [
     ([1.0, 1.0, math.nan, 1.0], {"H1": "unknown", "H2": "unknown", "H3": "satisfied"}),
     ([1.0, 7.0, math.nan, 1.0], {"H1": "violated", "H2": "violated", "H3": "satisfied"}),
-)
+])
 @pytest.mark.tor("TOR-DMG-004")
 def test_a_comparison_with_nan_inside_a_binding_is_unread(tmp_path, values, want):
     """The schema-free spelling of the NaN case: the comparison sits in the binding file, not
