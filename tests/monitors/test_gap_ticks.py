@@ -130,6 +130,21 @@ def test_a_verdict_across_a_gap_is_what_every_count_and_filling_gives(text, rows
     _check(text, rows, holes, gap_at)
 
 
+@pytest.mark.tor("TOR-VER-004")
+def test_a_previous_value_at_a_gap_tick_whose_value_is_known_and_changed():
+    """A gap tick stands for one tick or more: where a variable is known there (its topic not
+    in the gap) and differs from the tick before, its previous value is the one before at
+    the gap's first tick and its own at the later ones: one tick satisfies, two violate."""
+    c, _ms = compiled_of("the sw shall always satisfy preReal(0, x) < 3")
+    pt = c.formalization.pt
+    known = {"x": np.zeros(2, np.bool_)}
+    cols = {"x": np.array([0.0, 5.0])}
+    assert decide(pt, cols, known, 2, True, np.array([False, True]))[0] is None
+    assert decide(pt, cols, known, 2, True, None)[0] is True  # (no gap: one tick)
+    cols = {"x": np.array([5.0, 5.0])}  # unchanged: violated at the gap's first tick
+    assert decide(pt, cols, known, 2, True, np.array([False, True]))[0] is False
+
+
 @pytest.mark.slow
 @settings(max_examples=3000, deadline=None)
 @given(text=st.sampled_from(SENTENCES), rows=st.lists(_row, min_size=1, max_size=8),
