@@ -144,6 +144,7 @@ def test_the_audit_of_the_recording_equals_the_watch_when_a_publisher_leaves(
         "publisher_left" if restart else "publisher_left_for_good"}
 
 
+@pytest.mark.tor("TOR-DMG-001")
 def test_a_record_of_gaps_that_cannot_be_read_is_a_problem_not_a_crash(tmp_path):
     from mcap.writer import Writer
 

@@ -50,6 +50,7 @@ def _write(path: Path, chunking, compression, index, repeat, extras) -> dict[str
     return written
 
 
+@pytest.mark.tor("TOR-LOG-001")
 @pytest.mark.parametrize("variant", VARIANTS, ids=lambda v: "-".join(map(str, v)))
 def test_every_writer_variant_is_read_as_written(tmp_path, variant):
     path = tmp_path / "v.mcap"

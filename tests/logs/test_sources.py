@@ -302,6 +302,98 @@ def test_damage_outside_chunks_fails_the_data_crc_only(tmp_path, chunked):
     assert good.problems == []
 
 
+
+@pytest.mark.tor("TOR-DMG-001")
+def test_a_chunk_whose_record_length_is_damaged_is_a_gap(tmp_path, chunked):
+    """A Chunk record whose length field is damaged (its highest byte flipped: the record
+    would run past the data section, so the index is not compared and the file is read
+    through it) is damage, not evidence, though its body still passes its CRC: its messages
+    are skipped, its span listed as chunk_corrupt and the log is partial."""
+    path, msgs, chunks = chunked
+    bad = chunks[4]
+    src = open_log(_copy(path, tmp_path / "length.mcap", flip=[bad.chunk_start_offset + 8]))
+    assert src.indexed
+    keep = lambda t: not (bad.message_start_time <= t <= bad.message_end_time)  # noqa: E731
+    assert [_key(m) for m in src.messages()] == _expected(msgs, keep=keep)
+    spans = [(p.log_time, p.end_time) for p in src.problems if p.kind == P.CHUNK_CORRUPT]
+    assert spans == [(bad.message_start_time, bad.message_end_time)]
+    assert src.partial and src.gaps[0][0] == bad.message_start_time
+
+
+@pytest.mark.tor("TOR-DMG-001")
+@pytest.mark.parametrize("opcode", [0x02, 0x0F], ids=["footer", "data_end"])
+def test_a_chunk_opcode_flipped_to_an_end_record_is_not_the_end(tmp_path, chunked, opcode):
+    """A Chunk record whose opcode reads Footer or DataEnd with records after it is a damaged
+    record, not the end of the data: read record by record, its messages are a gap (a
+    corrupt_record problem) and every message after it is still read."""
+    path, msgs, chunks = chunked
+    bad = chunks[4]
+    data = bytearray(path.read_bytes())
+    data[bad.chunk_start_offset] = opcode
+    (tmp_path / "end.mcap").write_bytes(bytes(data))
+    src = open_log(tmp_path / "end.mcap")
+    assert not src.indexed
+    keep = lambda t: not (bad.message_start_time <= t <= bad.message_end_time)  # noqa: E731
+    assert [_key(m) for m in src.messages()] == _expected(msgs, keep=keep)
+    assert P.CORRUPT_RECORD in [p.kind for p in src.problems] and src.partial
+
+
+def _float64_mcap(path: Path, index: object, **options: object) -> None:
+    """Two Float64 topics (/a every 10 ms, /b every 30 ms) written by the mcap writer with
+    ``index`` (an ``IndexType``) and ``options``."""
+    from mcap.writer import Writer
+
+    with open(path, "wb") as f:
+        w = Writer(f, index_types=index, **options)
+        w.start("ros2", "fretc-tests")
+        sid = w.register_schema("std_msgs/msg/Float64", "ros2msg", b"float64 data")
+        ids = {t: w.register_channel(t, "cdr", sid) for t in ("/a", "/b")}
+        for i in range(120):
+            for topic in ("/a",) if i % 3 else ("/a", "/b"):
+                w.add_message(ids[topic], log_time=i * 10 * MS, publish_time=i * 10 * MS,
+                              data=b"\x00\x01\x00\x00" + struct.pack("<d", float(i)))
+        w.finish()
+
+
+@pytest.mark.tor("TOR-DMG-001")
+def test_a_data_section_crc_mismatch_read_without_an_index_makes_the_log_partial(tmp_path):
+    """A file without a summary (read record by record, ending with its Footer) whose data
+    section no longer matches its DataEnd CRC (a byte of its Header changed): every message
+    is read, the data_crc problem is listed and the log is partial."""
+    from mcap.writer import IndexType
+
+    path = tmp_path / "plain.mcap"
+    _float64_mcap(path, IndexType.NONE, use_statistics=False, use_summary_offsets=False,
+                  repeat_channels=False, repeat_schemas=False, enable_data_crcs=True)
+    good = open_log(path)
+    assert len(list(good.messages())) == 160 and not good.indexed and not good.partial
+    data = path.read_bytes().replace(b"fretc-tests", b"fretc-testz", 1)
+    (tmp_path / "crc.mcap").write_bytes(data)
+    src = open_log(tmp_path / "crc.mcap")
+    assert len(list(src.messages())) == 160
+    assert [p.kind for p in src.problems] == [P.DATA_CRC] and src.partial
+
+
+@pytest.mark.tor("TOR-DMG-002")
+def test_a_damaged_chunk_without_message_indexes_is_a_gap_of_every_topic(tmp_path):
+    """A summary whose ChunkIndex records name no channel (written without message indexes)
+    says nothing of a damaged chunk's topics: its gap may hold any topic (topics None),
+    never none."""
+    from mcap.writer import IndexType
+
+    path = tmp_path / "chunk_index.mcap"
+    _float64_mcap(path, IndexType.CHUNK, chunk_size=512)
+    with open(path, "rb") as f:
+        chunks = sorted(make_reader(f).get_summary().chunk_indexes,
+                        key=lambda c: c.chunk_start_offset)
+    assert len(chunks) > 3 and not chunks[2].message_index_offsets
+    middle = chunks[2].chunk_start_offset + chunks[2].chunk_length // 2
+    src = open_log(_copy(path, tmp_path / "damaged.mcap", flip=[middle, middle + 1]))
+    assert src.indexed
+    list(src.messages())
+    assert len(src.gaps) == 1 and src.gaps[0].topics is None and src.partial
+
+
 def test_corrupt_summary_falls_back_to_linear_read(tmp_path, chunked):
     path, msgs, _chunks = chunked
     size = path.stat().st_size
