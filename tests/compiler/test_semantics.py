@@ -414,3 +414,25 @@ def test_ifthen_regrouped_meanings_differ():
     f = formalize(parse("the sw shall always satisfy a | if b then c"))
     (w,) = f.warnings
     assert "((a | b) -> c)" in w and "(a | (b -> c))" in w
+
+
+@pytest.mark.tor("TOR-SEM-012")
+def test_printers_write_each_operator_and_name_as_downstream_tools_read_them():
+    """Unary minus and negation in SMV and in FRETish text, a function of two arguments
+    apart from FRET's since, a stream by its state bit, and a name starting with ``_``
+    kept as it is (the mangling idempotent)."""
+    from fretc.compiler.printers import expr_text
+    from fretc.fretish import ast as A
+    from fretc.fretish.fret_since import SINCE, STREAM_PREFIX
+
+    f = formalize(parse("the sw shall always satisfy -x < y & !p"))
+    assert to_smv(f.ft) == "(LAST V (((- x) < y) & (! p)))"
+    response = parse("the sw shall always satisfy -x < maxReal(y, z) & !p").response
+    assert expr_text(response) == "(((- x) < maxReal(y,z)) & (! p))"
+    a, c = A.Var("a"), A.Var("c")
+    assert expr_text(A.Call(SINCE, (a, c))) == "(a S c)"
+    assert expr_text(A.Call(STREAM_PREFIX + "s 1", (a, c))) == "_DQT_s_SPC_1_DQT_"
+    assert mangle("_speed") == "_speed" and mangle(mangle("_a b")) == mangle("_a b")
+    from fretc.compiler.printers import to_spot
+    inf = formalize(parse("whenever c the sw shall within 2 ticks satisfy r")).ft_inf
+    assert to_spot(inf) == "(G (c -> (F[0..2] r)))"
