@@ -91,7 +91,24 @@ def test_create_output_removes_a_link_and_creates_exclusively(tmp_path, victim):
     assert not out.is_symlink()
 
 
-@pytest.mark.skipif(not os.path.exists("/dev/null"), reason="no /dev/null on this system")
+def _device(tmp_path: Path, name: str, minor: int) -> str:
+    """The character device ``/dev/NAME`` (major 1, ``minor``) to write to: as root a node of
+    its own made in ``tmp_path`` (a broken fretc, or a mutant of the campaign, renaming a file
+    over it must not replace the machine's /dev/null), else the machine's (a fault is then a
+    permission error). Skips where neither can be had."""
+    if os.geteuid() != 0:
+        if not os.path.exists(f"/dev/{name}"):
+            pytest.skip(f"no /dev/{name} on this system")
+        return f"/dev/{name}"
+    node = tmp_path / name
+    try:
+        os.mknod(node, 0o666 | stat.S_IFCHR, os.makedev(1, minor))
+    except OSError as exc:
+        pytest.skip(f"as root, a device of the test's own cannot be made ({exc})")
+    return str(node)
+
+
+@pytest.mark.tor("TOR-OUT-002")
 def test_a_device_or_fifo_named_as_the_output_is_written_through_and_stays_one(tmp_path):
     """``-o /dev/null`` discards the output as the shell's ``>`` does: /dev/null stays a
     character device (renaming a temporary file over it made it a regular file when fretc
@@ -102,10 +119,11 @@ def test_a_device_or_fifo_named_as_the_output_is_written_through_and_stays_one(t
 
     from fretc.common import outputs
 
-    outputs.write_file("/dev/null", "discarded\n")
-    with outputs.create_output("/dev/null") as f:
+    null = _device(tmp_path, "null", 3)
+    outputs.write_file(null, "discarded\n")
+    with outputs.create_output(null) as f:
         f.write(b"discarded")
-    assert stat.S_ISCHR(os.lstat("/dev/null").st_mode)
+    assert stat.S_ISCHR(os.lstat(null).st_mode)
     fifo = tmp_path / "p"
     os.mkfifo(fifo)
     got: list[bytes] = []
@@ -115,7 +133,7 @@ def test_a_device_or_fifo_named_as_the_output_is_written_through_and_stays_one(t
     reader.join(timeout=30)
     assert got == [b"through the pipe\n"] and stat.S_ISFIFO(os.lstat(fifo).st_mode)
     link = tmp_path / "out.txt"
-    link.symlink_to("/dev/null")
+    link.symlink_to(null)
     with pytest.raises(outputs.OutputError) as err:
         outputs.write_file(link, "x")
     assert str(link) in str(err.value) and "a link to a device" in str(err.value)
@@ -377,3 +395,33 @@ def test_estimate_and_falsify_refuse_a_linked_runs_folder(tmp_path):
     with pytest.raises(OSError, match="runs"):  # (fretc.common.outputs.OutputError)
         Runner(None, None, out)
     assert _state(victim_dir) == {"keep.txt": PRECIOUS}
+
+
+@pytest.mark.tor("TOR-OUT-002")
+def test_a_failed_write_is_an_output_error_naming_the_output(tmp_path):
+    """An output whose temporary file cannot be made (no such folder), and a device written
+    in place that fails the write (``/dev/full``: no space), are OutputErrors naming the
+    output, never a bare OSError."""
+    from fretc.common.outputs import OutputError, open_output
+
+    missing = tmp_path / "no folder" / "out.json"  # (its temporary file cannot be made)
+    with pytest.raises(OutputError, match="no folder"):
+        with open_output(missing) as f:
+            f.write("x")
+    full = _device(tmp_path, "full", 7)
+    with pytest.raises(OutputError, match=full):
+        with open_output(full) as f:
+            f.write("x" * 100_000)
+            f.flush()
+
+
+@pytest.mark.tor("TOR-OUT-001")
+def test_an_output_inside_an_input_folder_is_refused_and_a_sibling_is_not(tmp_path):
+    from fretc.common.outputs import OutputError, refuse_replacing_inputs
+
+    runs = tmp_path / "runs"
+    runs.mkdir()
+    (tmp_path / "runs2").mkdir()
+    with pytest.raises(OutputError, match="inside the log"):
+        refuse_replacing_inputs([("--json", runs / "a.json")], [("the log", runs)])
+    refuse_replacing_inputs([("--json", tmp_path / "runs2" / "a.json")], [("the log", runs)])
