@@ -135,7 +135,9 @@ AREAS: tuple[Area, ...] = (
     Area("statistics", "Verdicts", ("audit/fleet/statistics.py",),
          ("TOR-VER-010", "TOR-SEM-011")),
     Area("open-obligations", "Damage and gaps", ("monitors/obligations.py",), _ids("DMG", 3)),
-    Area("gap-bridges", "Damage and gaps", ("audit/gaps.py",), _ids("DMG", 6)),
+    # the gaps of a log: the ticks they make unknown (TOR-DMG-002) and those bridged
+    # (TOR-DMG-006)
+    Area("gap-bridges", "Damage and gaps", ("audit/gaps.py",), _ids("DMG", 2, 6)),
     Area("outputs", "Outputs", ("common/outputs.py",), _ids("OUT", 1, 2)),
     # the audit document read back by report and export against its JSON Schema
     Area("audit-json", "Verdicts", ("reports/files.py",), _ids("VER", 8)),
