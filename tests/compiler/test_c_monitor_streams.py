@@ -68,6 +68,7 @@ def _python(cls, trace: list[dict]) -> tuple[list, int]:
     return ticks, int(m.finish())
 
 
+@pytest.mark.tor("TOR-GEN-003")
 @settings(max_examples=40, deadline=None)
 @given(st.lists(_ROW, min_size=1, max_size=12))
 def test_the_c_monitor_steps_as_the_streams_written_out(built, rows):
@@ -83,6 +84,7 @@ def test_the_c_monitor_steps_as_the_streams_written_out(built, rows):
             assert got["finish"] == fin, m.id
 
 
+@pytest.mark.tor("TOR-GEN-003")
 def test_a_nan_input_of_a_stream_makes_its_tick_unread(built):
     exe, monitors, _fed = built
     row = {"Psi": 1.0, "hdg": False, "autopilot_engaged": False, "roll_angle": 0.0,
@@ -148,6 +150,7 @@ def mixed(tmp_path_factory):
     return exe, [m for u in units for m in u.monitors], py
 
 
+@pytest.mark.tor("TOR-GEN-003")
 @settings(max_examples=40, deadline=None)
 @given(st.lists(st.fixed_dictionaries({"x": st.booleans(), "y": st.sampled_from(
     [-2.0, 0.0, 1.5, 3.0, 7.0])}), min_size=1, max_size=12))

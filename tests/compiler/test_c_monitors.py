@@ -262,6 +262,47 @@ def test_an_uninterpreted_function_of_terms_builds_under_werror(tmp_path):
     assert out["ticks"] == b.python("U", trace)[0]
 
 
+
+@pytest.mark.tor("TOR-GEN-003")
+def test_eleven_atoms_and_a_ring_of_bytes_build_and_step_as_python(tmp_path):
+    """A requirement over 11 atoms (no LTL3 automaton: its status stays unknown) and one
+    whose window keeps a ring of several bytes in its state: both C monitors build (the
+    state's size checked at compile time against the fields laid out largest element
+    first) and step as the Python monitors."""
+    needs_cc()
+    atoms = [f"a{i}" for i in range(11)]
+    b = Built(_compile({"A": "the sw shall always satisfy " + " | ".join(atoms),
+                        "W": "the sw shall always satisfy occurred(30, 40, q) | p"}),
+              tmp_path, "wide", False)
+    assert not b.skipped and [m.id for m in b.monitors] == ["A", "W"]
+    assert max(f.length for f in b.monitors[1].fields) >= 4  # a ring of 4 bytes
+    rnd = random.Random(4)
+    cases = [(rid, [{v: rnd.random() < 0.1 for v in [*atoms, "p", "q"]} for _ in range(60)])
+             for rid in ("A", "W") for _ in range(3)]
+    for (rid, trace), out in zip(cases, b.run(cases)):
+        assert out["ticks"] == b.python(rid, trace)[0], rid
+
+
+@pytest.mark.tor("TOR-GEN-003")
+def test_three_ids_of_one_c_identifier_get_their_own_monitors(tmp_path):
+    """Three ids that make one C identifier (``a.b``, ``a b``, ``a-b``: ``a_b``) get three
+    monitors (``_2``, ``_3``), which build together, and the runner gives each its own
+    verdict."""
+    import subprocess
+
+    needs_cc()
+    files, skipped = emit_c(_compile({"a.b": "the sw shall always satisfy p",
+                                      "a b": "the sw shall always satisfy q",
+                                      "a-b": "the sw shall always satisfy r"}))
+    assert not skipped
+    write(files, tmp_path)
+    exe = build(tmp_path, ["test_monitors.c", "runner.c"], "runner")
+    (tmp_path / "t.csv").write_text("p,q,r\ntrue,false,true\n")
+    got = subprocess.run([str(exe), str(tmp_path / "t.csv")], capture_output=True, text=True)
+    assert [line.split("\t")[:2] for line in got.stdout.splitlines()] == [
+        ["a.b", "satisfied"], ["a b", "violated"], ["a-b", "satisfied"]], got
+
+
 # --------------------------------------------------------------------------- the C text
 def _code(text: str) -> str:
     return re.sub(r"/\*.*?\*/", "", text, flags=re.S)
@@ -355,6 +396,7 @@ def _emit_files(tmp_path, files: dict[str, str], *args):
     return out
 
 
+@pytest.mark.tor("TOR-GEN-003")
 @pytest.mark.parametrize("split", [False, True])
 @pytest.mark.parametrize("files", [
     {"a.fret": "b_c: the sw shall always satisfy p\n",
