@@ -54,6 +54,7 @@ def _audit(d, *extra):
     return res, json.loads(out.read_text())
 
 
+@pytest.mark.tor("TOR-VER-010")
 def test_per_trigger_and_per_run_readings_decide_differently(fleet):
     res, doc = _audit(fleet)
     (st,) = doc["statistics"]
