@@ -530,6 +530,29 @@ def test_bad_input_exits_2(tmp_path):
     assert res.exit_code == 2
 
 
+@pytest.mark.tor("TOR-VER-008")
+def test_a_refused_document_names_its_first_break_and_how_many_more(tmp_path):
+    """fretc report refuses an audit document that breaks the schema naming the first break
+    in document order, its value cut to 80 characters, and how many others there are."""
+    (tmp_path / "r.fret").write_text("R: the robot shall always satisfy ok\n")
+    (tmp_path / "run.csv").write_text("ok\n1\n1\n")
+    good = tmp_path / "a.json"
+    res = run("audit", "-r", tmp_path / "r.fret", tmp_path / "run.csv", "--no-progress",
+              "--json", good)
+    assert res.exit_code == 0, res.output
+    long = ["x" * 100]
+    cut = repr(long)[:77] + "..."
+    for extra, more in (({}, ""), ({"requirements": "x"}, " (and 1 more)")):
+        doc = json.loads(good.read_text())
+        doc["logs"][0]["log"] = long
+        doc.update(extra)
+        bad = tmp_path / "bad.json"
+        bad.write_text(json.dumps(doc))
+        res = run("report", "--from-json", bad, "-o", tmp_path / "o")
+        want = f"$.logs[0].log: {cut} is not of type 'string'{more}\n"
+        assert res.exit_code == 2 and want in res.output, res.output
+
+
 # --------------------------------------------------------------------------- Chromium
 def test_report_opens_in_headless_chromium(shipped, tmp_path):
     bench = _bench()
