@@ -145,6 +145,18 @@ def test_a_previous_value_at_a_gap_tick_whose_value_is_known_and_changed():
     assert decide(pt, cols, known, 2, True, np.array([False, True]))[0] is False
 
 
+@pytest.mark.tor("TOR-VER-004")
+def test_arithmetic_negation_over_an_unknown_tick():
+    """Kleene's reading of a negated number: known where its operand is, unknown at the tick
+    whose value is unknown, and a violation on a known tick stands."""
+    c, _ms = compiled_of("the sw shall always satisfy -x < 0")
+    pt = c.formalization.pt
+    none, one = np.zeros(3, np.bool_), np.array([False, True, False])
+    assert decide(pt, {"x": np.array([1.0, 2.0, 3.0])}, {"x": none}, 3)[0] is True
+    assert decide(pt, {"x": np.array([1.0, 2.0, 3.0])}, {"x": one}, 3)[0] is None
+    assert decide(pt, {"x": np.array([1.0, 2.0, -3.0])}, {"x": one}, 3)[0] is False
+
+
 @pytest.mark.slow
 @settings(max_examples=3000, deadline=None)
 @given(text=st.sampled_from(SENTENCES), rows=st.lists(_row, min_size=1, max_size=8),
