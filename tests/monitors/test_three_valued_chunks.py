@@ -132,6 +132,7 @@ def test_kleene_streams_of_random_requirements(seed, n, rnd):
 
 @settings(max_examples=200, deadline=None)
 @given(_PAST, st.integers(1, 30), _SEEDS)
+@pytest.mark.tor("TOR-LOG-003")
 def test_kleene_values_in_chunks_are_those_of_one_chunk(node, n, rnd):
     """Every past-time formula (bounded windows across gap ticks and chunk edges): the
     values fed in chunks, each temporal operator's state carried, are those of the whole
