@@ -96,3 +96,34 @@ def test_a_gap_is_listed_in_the_report(tmp_path):
     assert res.exit_code == 3, res.output
     html = (tmp_path / "rep" / "report.html").read_text()
     assert "chunk_crc over" in html and "their ticks are unknown" in html
+
+
+TICK_ON_W = '[tick]\ntopic = "/w"\n[variables]\nv = "/v.data"\nw = "/w.data"\n'
+
+
+def _two_topics(tmp_path: Path, lost: list[tuple[str, int]], high_w: int = -1) -> Path:
+    """/v and /w at 10 Hz for 30 s, each value 1.0 (/w's ``high_w``-th 9.0); the messages
+    ``lost`` (topic, index) written undecodable."""
+    msgs = [(t, "std_msgs/msg/Float64", S + k * S // 10,
+             float64(9.0 if (t, k) == ("/w", high_w) else 1.0))
+            for k in range(300) for t in ("/v", "/w")]
+    raw = {2 * k + (t == "/w"): b"\x00" for t, k in lost}
+    (tmp_path / "r.fret").write_text(FRET)
+    (tmp_path / "r.bindings.toml").write_text(TICK_ON_W)
+    return write_mcap(tmp_path / f"run{len(lost)}.mcap", msgs, raw_override=raw)
+
+
+@pytest.mark.tor("TOR-DMG-002")
+def test_on_a_topics_clock_its_gaps_are_unknown_ticks_of_their_own(tmp_path):
+    """A clock ticking on /w's messages: /v's undecodable message leaves unknown the one tick
+    that holds the /v message before it and puts no tick of its own on /w's clock; /w's two
+    undecodable messages are each one unknown tick put in its place, and only those ticks
+    are unknown for what reads /w (a /w value of 9 two messages before the second stays a
+    violation)."""
+    _la, v = _audit(tmp_path, _two_topics(tmp_path, [("/v", 50)]))
+    assert (v["RV"].verdict, v["RV"].ticks_evaluated, v["RV"].unknown_ticks) == ("unknown", 300, 1)
+    assert (v["RW"].verdict, v["RW"].unknown_ticks) == ("satisfied", 0)
+    _la, v = _audit(tmp_path, _two_topics(tmp_path, [("/w", 100), ("/w", 200)], high_w=198))
+    assert v["RW"].ticks_evaluated == 300 and v["RW"].unknown_ticks == 2
+    assert v["RW"].verdict == "violated"
+    assert v["RW"].first_violation.at.time_ns == S + 198 * S // 10
