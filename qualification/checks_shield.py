@@ -252,20 +252,18 @@ def _bits(values: list[int]) -> str:
     return "".join(str(int(b)) for b in values)
 
 
-def _python_steps(shield: Any) -> tuple[list[str], list[str]]:
-    """The Python form stepped over seeded random runs (``x`` held from the tick before
-    with probability 0.7, proposals random): per tick the line ``s_shield.java``'s ``main``
-    reads (input atoms, proposed atoms, the state before) and the line it must print
-    (decided atoms, the next state, whether an assumption broke)."""
-    rnd = random.Random(SEED + 12)
+def machine_lines(shield: Any, runs: list[list[tuple[dict[str, Any], dict[str, Any]]]]
+                  ) -> tuple[list[str], list[str]]:
+    """The Python form ``shield`` (a new ``Shield()``) stepped over ``runs`` (each a list of
+    ``(inputs, proposal)`` per tick, the shield reset before each): per tick the line the
+    Gwendolen form's ``N_shield.java`` ``main`` reads (input atoms, proposed atoms, the state
+    before, as 0s and 1s) and the line it must print (decided atoms, the next state, 1 when
+    an assumption broke)."""
     machines = shield.machines
     lines, want = [], []
-    for _ in range(JAVA_RUNS):
+    for run in runs:
         shield.reset()
-        x = 0.0
-        for _t in range(JAVA_TICKS):
-            x = x if rnd.random() < 0.7 else float(rnd.randint(0, 9))
-            ins, prop = {"x": x}, {"o": rnd.random() < 0.35}
+        for ins, prop in run:
             before = [b for m in machines for b in m.state]
             in_atoms: dict[str, int] = {}
             for m in machines:  # (an input atom several machines read is one percept)
@@ -279,6 +277,20 @@ def _python_steps(shield: Any) -> tuple[list[str], list[str]]:
                          f"{_bits(before)}")
             want.append(f"{_bits(out_atoms)} {_bits(after)} {int(bool(d.broken))}")
     return lines, want
+
+
+def _java_runs() -> list[list[tuple[dict[str, Any], dict[str, Any]]]]:
+    """Seeded random runs of the check shield: ``x`` held from the tick before with
+    probability 0.7, proposals random."""
+    rnd = random.Random(SEED + 12)
+    runs = []
+    for _ in range(JAVA_RUNS):
+        x, run = 0.0, []
+        for _t in range(JAVA_TICKS):
+            x = x if rnd.random() < 0.7 else float(rnd.randint(0, 9))
+            run.append(({"x": x}, {"o": rnd.random() < 0.35}))
+        runs.append(run)
+    return runs
 
 
 def check_shield_gwendolen(run: Run) -> list[str]:
@@ -297,7 +309,7 @@ def check_shield_gwendolen(run: Run) -> list[str]:
     gwen = (out / "s.gwen").read_text(encoding="utf-8").splitlines()
     if AGENT_PLAN not in gwen or "o :- mem(_, v(1), _);" not in gwen:
         failures.append("the agent's +tick plan or its belief o is not the machine's decision")
-    lines, want = _python_steps(_load(out / "s_shield.py").Shield())
+    lines, want = machine_lines(_load(out / "s_shield.py").Shield(), _java_runs())
     classes = out / "classes"
     # (no performance data files in the machine's temporary folder: -XX:-UsePerfData)
     built = subprocess.run([javac, "-J-XX:-UsePerfData", "-nowarn", "-d", str(classes),

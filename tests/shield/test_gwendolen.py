@@ -21,6 +21,7 @@ import pytest
 from click.testing import CliRunner
 
 from fretc.cli import main
+from fretc.qualification.checks_shield import machine_lines
 from fretc.shield.emit_python import load_shield
 
 REPO = Path(__file__).resolve().parents[2]
@@ -126,10 +127,6 @@ def _random_runs(seed: int, runs: int, ticks: int) -> list[list[tuple[dict, dict
     return out
 
 
-def _bits(values: list[int] | tuple[int, ...]) -> str:
-    return "".join(str(int(b)) for b in values)
-
-
 def java_steps(folder: Path, lines: list[str], tmp: Path) -> list[str]:
     """``N_shield.java``'s ``main`` over ``lines`` ("INPUTS PROPOSAL STATE"), compiled with
     javac and run with the ``java`` beside it."""
@@ -153,24 +150,7 @@ def python_steps(folder: Path, runs: list[list[tuple[dict, dict]]]
     must print (the decided atoms, the next state, whether an assumption broke)."""
     shield = load_shield((folder / "safe_ros_shield.py").read_text(encoding="utf-8"),
                          "gwendolen_diff_shield")()
-    machines = shield.machines
-    lines, want = [], []
-    for run in runs:
-        shield.reset()
-        for ins, prop in run:
-            before = [b for m in machines for b in m.state]
-            in_atoms: dict[str, int] = {}
-            for m in machines:  # (an input atom read by several machines is one percept)
-                for spec, f in zip(m.ins, m.in_tests):
-                    in_atoms[repr(spec)] = int(f(ins))
-            prop_atoms = [int(f(prop)) for m in machines for f in m.out_tests]
-            d = shield.step(ins, prop)
-            out_atoms = [int(f(d.outputs)) for m in machines for f in m.out_tests]
-            after = [b for m in machines for b in m.state]
-            lines.append(f"{_bits(list(in_atoms.values()))} {_bits(prop_atoms)} "
-                         f"{_bits(before)}")
-            want.append(f"{_bits(out_atoms)} {_bits(after)} {int(bool(d.broken))}")
-    return lines, want
+    return machine_lines(shield, runs)
 
 
 @pytest.mark.tor("TOR-SHD-006")
