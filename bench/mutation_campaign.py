@@ -139,6 +139,10 @@ AREAS: tuple[Area, ...] = (
     # (TOR-DMG-006)
     Area("gap-bridges", "Damage and gaps", ("audit/gaps.py",), _ids("DMG", 2, 6)),
     Area("outputs", "Outputs", ("common/outputs.py",), _ids("OUT", 1, 2)),
+    # the Gwendolen agent (its machine in Java, its plans, the environment of AJPF's runs)
+    Area("gwendolen", "Shield", ("shield/emit_gwendolen.py",), _ids("SHD", 6)),
+    # the ROS 1 bag and rosbag2 readers: the same messages as the other containers
+    Area("ros-bags", "Log readers", ("logs/ros/bags.py",), ("TOR-LOG-001",)),
     # the audit document read back by report and export against its JSON Schema
     Area("audit-json", "Verdicts", ("reports/files.py",), _ids("VER", 8)),
     # the validation suite's verdict per requirement and its mutation run (the kit itself)
