@@ -276,12 +276,16 @@ def mark_gaps(res: ClockPass, names: list[str], bindings: Bindings | None,
     A gap reaching past the clock's last tick is a cut there (the run went on, unread:
     :func:`cut_at_damage`'s rule); one before its first tick leaves the start of the run
     unknown: one tick is put before the first, unknown for every variable; on a clock that
-    ticks on a topic's messages, a gap of that topic is one unknown tick of its own
-    (:func:`fretc.audit.gaps.insert_gap_ticks`). Inserted ticks are listed in
+    ticks on a topic's messages, a gap of that topic is one unknown tick of its own, whether
+    or not the clock's variables read the topic (:func:`fretc.audit.gaps.insert_gap_ticks`;
+    KP-177). Inserted ticks are listed in
     ``res.tick_gaps`` (how many ticks they stand for is not known). ``lost``: the
     messages of the clock's topics present but not decoded, in words
     (:func:`lost_in_words`), for the reasons given."""
-    own = gaps_of_clock(gaps, topics if bindings is not None else [CSV_TOPIC])
+    tick_topic = bindings.tick.topic if bindings is not None else None
+    # (a gap of the tick topic lost ticks of the clock, whatever its variables read)
+    own = gaps_of_clock(gaps, ([*topics, tick_topic] if tick_topic is not None else topics)
+                        if bindings is not None else [CSV_TOPIC])
     res.gaps = own
     res.lost_words = lost
     if not own or not len(res.times):
@@ -290,7 +294,6 @@ def mark_gaps(res: ClockPass, names: list[str], bindings: Bindings | None,
     if not len(res.times):
         return
     lag = bindings.header_lag_ns if bindings is not None and bindings.time_base != "log" else 0
-    tick_topic = bindings.tick.topic if bindings is not None else None
     if tick_topic is not None:
         res.tick_gaps = insert_gap_ticks(res, own, tick_topic)
     res.unknown = unknown_masks(res.times, res.log_times, names, bindings, own, lag)

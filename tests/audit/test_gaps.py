@@ -127,3 +127,35 @@ def test_on_a_topics_clock_its_gaps_are_unknown_ticks_of_their_own(tmp_path):
     assert v["RW"].ticks_evaluated == 300 and v["RW"].unknown_ticks == 2
     assert v["RW"].verdict == "violated"
     assert v["RW"].first_violation.at.time_ns == S + 198 * S // 10
+
+
+def _verdicts(folder: Path, log: Path) -> dict:
+    """requirement id -> its verdict, the requirements of ``folder/r.fret`` audited on ``log``."""
+    plan = load_plan(AuditConfig(requirements=(str(folder / "r.fret"),)))
+    return {v.requirement: v for v in audit_log(plan, str(log)).verdicts}
+
+
+@pytest.mark.tor("TOR-DMG-002")
+def test_a_gap_of_the_tick_topic_is_a_gap_tick_of_every_requirement_on_its_clock(tmp_path):
+    """KP-177, fixed: a clock ticking on /w's messages; /w's messages 100 and 200
+    undecodable (two gaps of /w), /v intact and 9.0 at its message 100 (the intact log
+    violates both requirements there). A requirement reading /v alone gets the clock's two
+    gap ticks as the one reading /w does: unknown on 300 ticks, 2 unknown; it was
+    satisfied on 298 ticks read as if consecutive."""
+    def log(lost: list[int]) -> Path:
+        msgs = [(t, "std_msgs/msg/Float64", S + k * S // 10,
+                 float64(9.0 if (t, k) == ("/v", 100) else 1.0))
+                for k in range(300) for t in ("/v", "/w")]
+        raw = {2 * k + 1: b"\x00" for k in lost}
+        return write_mcap(tmp_path / f"run{len(lost)}.mcap", msgs, raw_override=raw)
+    (tmp_path / "r.fret").write_text("RV: the sys shall always satisfy v < 5\n"
+                                     "RVW: the sys shall always satisfy v < 5 & w < 5\n")
+    (tmp_path / "r.bindings.toml").write_text(
+        '[tick]\ntopic = "/w"\n[variables]\nv = "/v.data"\nw = "/w.data"\n')
+    intact = _verdicts(tmp_path, log([]))
+    assert intact["RV"].verdict == "violated" and intact["RVW"].verdict == "violated"
+    v = _verdicts(tmp_path, log([100, 200]))
+    assert (v["RVW"].verdict, v["RVW"].ticks_evaluated, v["RVW"].unknown_ticks) == \
+        ("unknown", 300, 2)
+    assert (v["RV"].verdict, v["RV"].ticks_evaluated, v["RV"].unknown_ticks) == \
+        ("unknown", 300, 2)

@@ -1,7 +1,8 @@
-"""Two open known problems of the gaps of a log (src/fretc/qualification/known_problems.toml):
-each test asserts the wrong result a user gets today, beside the log that shows it (the same
+"""An open known problem of the gaps of a log (src/fretc/qualification/known_problems.toml):
+its test asserts the wrong result a user gets today, beside the log that shows it (the same
 log intact, or a requirement that reads what the wrong one does not). When a problem is
-fixed, its test is turned into the right result and the problem's entry is closed."""
+fixed, its test is turned into the right result and the problem's entry is closed (KP-177's
+is now tests/audit/test_gaps.py::test_a_gap_of_the_tick_topic_is_a_gap_tick_of_every_requirement_on_its_clock)."""
 
 from __future__ import annotations
 
@@ -11,7 +12,7 @@ from mcap.reader import make_reader
 
 from fretc.audit import AuditConfig, audit_log, load_plan
 
-from _logs import S, float64, twist_stamped, write_mcap
+from _logs import S, twist_stamped, write_mcap
 
 WALL = 1_700_000_000 * S  # log times on the wall clock; header stamps from 0 (a simulation)
 
@@ -56,28 +57,3 @@ def test_a_gap_under_header_stamps_far_from_log_times_leaves_no_tick_unknown(tmp
     v = _verdicts(tmp_path, _header_log(tmp_path, damaged=True))["RD"]
     assert (v.verdict, v.unknown_ticks) == ("violated", 0)  # the right result: unknown
     assert v.first_violation.at.time_ns == S + 153 * S // 10  # the first /v after the gap
-
-
-def test_a_gap_of_the_tick_topic_puts_no_gap_tick_on_a_requirement_not_reading_it(tmp_path):
-    """KP-177: a clock ticking on /w's messages; /w's messages 100 and 200 undecodable (two
-    gaps of /w), /v intact and 9.0 at its message 100. A requirement reading /v alone is
-    judged on the 298 ticks read as if consecutive (no gap tick): satisfied, where the intact
-    log violates it at tick 100 and the requirement that also reads /w is unknown."""
-    def log(lost: list[int]) -> Path:
-        msgs = [(t, "std_msgs/msg/Float64", S + k * S // 10,
-                 float64(9.0 if (t, k) == ("/v", 100) else 1.0))
-                for k in range(300) for t in ("/v", "/w")]
-        raw = {2 * k + 1: b"\x00" for k in lost}
-        return write_mcap(tmp_path / f"run{len(lost)}.mcap", msgs, raw_override=raw)
-    (tmp_path / "r.fret").write_text("RV: the sys shall always satisfy v < 5\n"
-                                     "RVW: the sys shall always satisfy v < 5 & w < 5\n")
-    (tmp_path / "r.bindings.toml").write_text(
-        '[tick]\ntopic = "/w"\n[variables]\nv = "/v.data"\nw = "/w.data"\n')
-    intact = _verdicts(tmp_path, log([]))
-    assert intact["RV"].verdict == "violated" and intact["RVW"].verdict == "violated"
-    v = _verdicts(tmp_path, log([100, 200]))
-    assert (v["RVW"].verdict, v["RVW"].ticks_evaluated, v["RVW"].unknown_ticks) == \
-        ("unknown", 300, 2)
-    # the right result: unknown, the two gap ticks of /w unknown
-    assert (v["RV"].verdict, v["RV"].ticks_evaluated, v["RV"].unknown_ticks) == \
-        ("satisfied", 298, 0)
