@@ -356,6 +356,11 @@ def run_area(area: Area, args: argparse.Namespace) -> dict[str, Any]:
         shutil.rmtree(clone)
     clone.parent.mkdir(parents=True, exist_ok=True)
     subprocess.run(["git", "clone", "-q", str(ROOT), str(clone)], check=True)
+    # the tests that read ../shared (real logs, FRET's projects) find it beside the clone as
+    # beside this repository: without it they skip, and a mutant they would kill survives
+    shared, beside = ROOT.parent / "shared", clone.parent / "shared"
+    if shared.is_dir() and not beside.exists():
+        beside.symlink_to(shared, target_is_directory=True)
     commit = subprocess.run(["git", "rev-parse", "HEAD"], cwd=clone, capture_output=True,
                             text=True, check=True).stdout.strip()
     nodes = traced_tests(area.tors, clone / "tests")

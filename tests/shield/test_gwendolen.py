@@ -202,6 +202,7 @@ def test_under_assumptions_the_broken_flag_and_the_fallback_match(tmp_path):
     assert any(w.endswith(" 1") for w in want) and any(w.endswith(" 0") for w in want)
 
 
+@pytest.mark.tor("TOR-SHD-006")
 def test_the_environment_lists_the_valuations_real_numbers_give(docs_forms):
     env = (docs_forms / "safe_ros_env.java").read_text(encoding="utf-8")
     m = re.search(r"static final int\[\] VALUATIONS = \{([^}]*)\};", env)
