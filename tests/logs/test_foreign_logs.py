@@ -22,6 +22,7 @@ def _logs():
             yield pytest.param(p, id=f"{p.parent.name}/{p.name}")
 
 
+@pytest.mark.tor("TOR-LOG-001")
 @pytest.mark.parametrize("log", params(_logs))
 def test_inspect_reads_every_foreign_log(log):
     res = CliRunner().invoke(main, ["inspect", str(log)])
@@ -39,6 +40,7 @@ def test_inspect_reads_every_foreign_log(log):
         assert counts.get(topic) or named or src.partial or empty, topic
 
 
+@pytest.mark.tor("TOR-LOG-001")
 @pytest.mark.parametrize("log", params(lambda: [FOREIGN / "ccny_lsm_crash" / "demo.bag"]))
 def test_an_old_bag_with_a_non_standard_index_is_read_record_by_record(log):
     """Its span is that of the messages read without the index (it was unknown), and the
@@ -55,6 +57,7 @@ def test_an_old_bag_with_a_non_standard_index_is_read_record_by_record(log):
     assert cut.detail.endswith("(rosbags' reader: AssertionError, without a message)")
 
 
+@pytest.mark.tor("TOR-LOG-001")
 def test_a_bag_of_format_1_2_is_refused_by_its_format(tmp_path):
     old = tmp_path / "old.bag"
     old.write_bytes(b"#ROSBAG V1.2\n" + bytes(range(256)) * 8)

@@ -93,6 +93,7 @@ def test_auditing_a_wal_bag_writes_nothing_beside_it(tmp_path, given):
                                                                 "topics_and_services.db3"]
 
 
+@pytest.mark.tor("TOR-LOG-001")
 @needs_shared
 @pytest.mark.parametrize("given", ["folder", "storage file alone"])
 def test_a_bag_on_read_only_media_audits_with_the_same_verdicts(tmp_path, given):

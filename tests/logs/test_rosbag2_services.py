@@ -78,6 +78,7 @@ def _waits(events, ticks: list[int]) -> list[float]:
     return [max([t - a for a, b in spans if a <= t < b], default=0) / 1e9 for t in ticks]
 
 
+@pytest.mark.tor("TOR-LOG-001")
 @needs_shared
 def test_service_requirements_on_rosbag2s_own_bag_match_an_independent_decode(tmp_path):
     (tmp_path / "s.fret").write_text(
@@ -109,6 +110,7 @@ def test_service_requirements_on_rosbag2s_own_bag_match_an_independent_decode(tm
     assert {v.verdict for v in got.values()} == {"satisfied", "violated"}
 
 
+@pytest.mark.tor("TOR-LOG-001")
 @needs_shared
 def test_a_storage_file_alone_reads_as_its_folder_with_metadata(tmp_path):
     """The .db3 given alone (as rosbag2 opens one): the same messages as the bag folder
