@@ -209,3 +209,35 @@ def test_the_environment_lists_the_valuations_real_numbers_give(docs_forms):
     assert m is not None
     assert [int(x) for x in m.group(1).split(",")] == list(range(16))  # four free booleans
     assert "//   push: 00000001 " in env and "//   stop: 11111111 " in env
+
+
+@pytest.mark.tor("TOR-SHD-006")
+def test_a_shield_with_preferences_decides_alike_in_java(tmp_path):
+    """A shield with ``--prefer`` (its corrections weighed): the Java machine carries the
+    weights and decides as the Python form on the qualify check's seeded runs."""
+    from fretc.qualification.checks_shield import _java_runs
+
+    javac = shutil.which("javac")
+    if javac is None:
+        pytest.skip(NO_JAVAC)
+    (tmp_path / "s.fret").write_text("S1: whenever x > 5 ctrl shall immediately satisfy o\n"
+                                     "S2: upon x > 5 ctrl shall for 2 ticks satisfy o\n")
+    (tmp_path / "s.toml").write_text('[tick]\nperiod = "100 ms"\n\n[variables]\n'
+                                     'x = "/x.data"\no = "/o.data"\n')
+    got = CliRunner().invoke(main, ["shield", str(tmp_path / "s.fret"), "-b",
+                                    str(tmp_path / "s.toml"), "--inputs", "x", "--outputs", "o",
+                                    "--prefer", "!o", "--emit", "python", "--emit", "gwendolen",
+                                    "-o", str(tmp_path / "out")])
+    assert got.exit_code == 0, got.output
+    java_text = (tmp_path / "out" / "s_shield.java").read_text(encoding="utf-8")
+    assert "new long[] {1}" in java_text  # (the weight of the preferred literal)
+    shield = load_shield((tmp_path / "out" / "s_shield.py").read_text(encoding="utf-8"),
+                         "gwendolen_prefer_shield")()
+    lines, want = machine_lines(shield, _java_runs())
+    classes = tmp_path / "classes"
+    subprocess.run([javac, "-nowarn", "-d", str(classes), str(tmp_path / "out" / "s_shield.java")],
+                   check=True, capture_output=True, timeout=300)
+    ran = subprocess.run([str(Path(javac).with_name("java")), "-cp", str(classes), "s_shield"],
+                         input="\n".join(lines) + "\n", capture_output=True, text=True,
+                         check=True, timeout=300)
+    assert ran.stdout.splitlines() == want
