@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import random
 import types
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 from fractions import Fraction
 from pathlib import Path
@@ -418,7 +418,7 @@ def check_functions(run: Run) -> list[str]:
     return _capped(out)
 
 
-def _bits(xs: list[bool]) -> str:
+def _bits(xs: Iterable[int]) -> str:
     """A column as 0s and 1s."""
     return "".join("1" if x else "0" for x in xs)
 

@@ -22,7 +22,7 @@ from pathlib import Path
 from typing import Any
 
 from fretc.qualification import reference as ref
-from fretc.qualification.checks import SEED, Check, CheckSkipped, Run, _capped
+from fretc.qualification.checks import SEED, Check, CheckSkipped, Run, _bits, _capped
 from fretc.qualification.checks_audit import fretc
 from fretc.qualification.checks_forms import SHIELD_KEYS, _folder, _load, shield_command
 from fretc.qualification.ros2_node import GRAPH_WAIT
@@ -245,11 +245,6 @@ def _gwendolen_forms(run: Run, name: str) -> Path | list[str]:
     if code != 0 or not (folder / "out" / "s.gwen").is_file():
         return [f"fretc shield --emit gwendolen exited {code}: {text.strip()[-300:]}"]
     return folder / "out"
-
-
-def _bits(values: list[int]) -> str:
-    """Atoms as 0s and 1s."""
-    return "".join(str(int(b)) for b in values)
 
 
 def machine_lines(shield: Any, runs: list[list[tuple[dict[str, Any], dict[str, Any]]]]
