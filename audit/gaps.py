@@ -6,7 +6,7 @@ Design notes: ARCHITECTURE.md, `audit/gaps.py`."""
 from __future__ import annotations
 
 from collections.abc import Iterable
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
 
@@ -21,7 +21,7 @@ if TYPE_CHECKING:
     from fretc.logs.base import LogSource
 
 __all__ = ["split_bridged", "inner_gaps", "unknown_masks", "gap_json", "gaps_of_clock",
-           "insert_gap_ticks", "merged_gaps"]
+           "insert_gap_ticks", "merged_gaps", "Placed", "placed"]
 
 _NEG, _POS = -(2**63), 2**63 - 1
 
@@ -58,10 +58,43 @@ def gaps_of_clock(gaps: Iterable[Gap], topics: Iterable[str]) -> list[Gap]:
     return [g for g in gaps if any(g.affects(t) for t in ts)]
 
 
+class Placed(NamedTuple):
+    """Where a gap of one topic lies among a clock's ticks under a header time base, found
+    from the log times of the messages the ticks hold (a topic's stamps taken to rise with
+    its log times, as a publisher stamps what it sends in order; KP-176).
+
+    Attributes:
+        first: index of the first tick that may hold a lost message: the first holding the
+            last message logged before the gap (0 where none is held).
+        last: index of the last tick holding no message logged after the gap (-1: none;
+            ``n - 1``: the gap reaches past the last tick).
+        before: whether a tick holds a message logged before the gap (False: lost messages
+            may precede the first tick).
+    """
+
+    first: int
+    last: int
+    before: bool
+
+
+def placed(held: np.ndarray, g: Gap) -> Placed:
+    """A gap placed among the ticks by ``held`` (int64, the log time in ns of the message
+    of the gap's topic each tick holds, -1 none; :class:`Placed`)."""
+    end = _POS if g.end is None else g.end
+    pre = held[held < g.start] if g.start is not None else held[:0]
+    h0 = int(pre.max()) if len(pre) else None
+    first = int(np.argmax(held >= h0)) if h0 is not None else 0
+    late = np.flatnonzero(held <= end)
+    return Placed(first, int(late[-1]) if len(late) else -1, h0 is not None and h0 >= 0)
+
+
 def _topic_mask(times: np.ndarray, held: np.ndarray, gaps: list[Gap], lag: int,
-                stateful: bool, folded: bool, span: int | None = None) -> np.ndarray:
+                stateful: bool, folded: bool, span: int | None = None,
+                header: bool = False) -> np.ndarray:
     """Unknown ticks of one topic (module docstring); ``held`` the log time of the message
-    each tick holds (-1: none); ``span`` a window's duration (ns; 0 a count of messages)."""
+    each tick holds (-1: none); ``span`` a window's duration (ns; 0 a count of messages).
+    ``header``: the ticks are header stamps, placed against a gap's log times by the
+    messages they hold (:func:`placed`), as well as by ``lag``."""
     n = len(times)
     out = np.zeros(n, np.bool_)
     prev = np.concatenate(([_NEG], times[:-1])) if n else times
@@ -69,6 +102,10 @@ def _topic_mask(times: np.ndarray, held: np.ndarray, gaps: list[Gap], lag: int,
         start = _NEG if g.start is None else g.start - lag
         end = _POS if g.end is None else g.end
         after = times >= start
+        if header:  # (KP-176: stamps far from their log times)
+            at = placed(held, g)
+            after = after | (np.arange(n) >= at.first)
+            nxt = times[at.last + 1] if at.last + 1 < n else _POS
         stale = after & (held <= end)
         out |= stale
         if stateful:  # the first message after the gap has a lost previous one
@@ -77,14 +114,18 @@ def _topic_mask(times: np.ndarray, held: np.ndarray, gaps: list[Gap], lag: int,
                 out |= held == held[fresh[0]]
         if folded:  # the span since the previous tick meets the gap
             out |= (times >= start) & (prev < end)
+            if header:
+                out |= after & (np.arange(n) <= at.last + 1)
         if span is not None:  # the window (t - span, t] meets the gap
             out |= (times >= start) & ((times - span < end) if span else True)
+            if header:
+                out |= after & ((times - span < nxt) if span else True)
     return out
 
 
 def unknown_masks(times: np.ndarray, log_times: dict[str, np.ndarray], names: Iterable[str],
-                  bindings: Bindings | None, gaps: list[Gap], header_lag_ns: int = 0
-                  ) -> dict[str, np.ndarray]:
+                  bindings: Bindings | None, gaps: list[Gap], header_lag_ns: int = 0,
+                  header: bool = False) -> dict[str, np.ndarray]:
     """Variable -> bool array over ``times`` (the clock's ticks), True where the variable is
     unknown because of ``gaps`` (module docstring); only variables with an unknown tick.
 
@@ -96,6 +137,7 @@ def unknown_masks(times: np.ndarray, log_times: dict[str, np.ndarray], names: It
         gaps: the log's gaps (:func:`inner_gaps`, bridged ones removed).
         header_lag_ns: under the header time base, how much earlier than its log time a
             message's stamp may be.
+        header: the ticks are header stamps (:func:`placed` places a gap among them too).
     """
     if not gaps or not len(times):
         return {}
@@ -119,7 +161,8 @@ def unknown_masks(times: np.ndarray, log_times: dict[str, np.ndarray], names: It
                 continue
             key = (t, t in stateful, folded, span, t in aged)
             if key not in masks:
-                masks[key] = _topic_mask(times, held, own, header_lag_ns, key[1], folded, span)
+                masks[key] = _topic_mask(times, held, own, header_lag_ns, key[1], folded, span,
+                                         header)
             mask |= masks[key]
         tw = getattr(b, "tick_window", None)
         if tw is not None and mask.any():  # count_ticks: unknown while such a tick is counted
@@ -130,13 +173,16 @@ def unknown_masks(times: np.ndarray, log_times: dict[str, np.ndarray], names: It
     return out
 
 
-def insert_gap_ticks(res: ClockPass, gaps: list[Gap], tick_topic: str) -> list[int]:
+def insert_gap_ticks(res: ClockPass, gaps: list[Gap], tick_topic: str,
+                     header: bool = False) -> list[int]:
     """On a clock that ticks on each message of ``tick_topic``, the ticks a gap of that topic
     lost are not known (not even how many): one tick is put in their place, at the gap's
     start, unknown for every variable (:func:`fretc.audit.passes.mark_gaps` marks it), so
     that nothing joins the ticks on both sides of the gap. Only gaps between two ticks of the
     clock get one. ``res`` (a :class:`fretc.audit.columns.ClockPass`) is changed in place:
     its times, columns and held log times (the tick before's values, which no verdict reads).
+    ``header``: the ticks are header stamps, and a gap goes after the last tick whose own
+    message was logged before it (:func:`placed`, on the tick topic's held log times).
 
     Returns:
         The indexes of the inserted ticks, ascending.
@@ -144,11 +190,22 @@ def insert_gap_ticks(res: ClockPass, gaps: list[Gap], tick_topic: str) -> list[i
     times = res.times
     if len(times) < 2:
         return []
-    at = sorted({int(g.start) for g in gaps if g.affects(tick_topic) and g.start is not None
-                 and g.end is not None and times[0] < g.start <= times[-1]})
+    own = res.log_times.get(tick_topic)
+    if header and own is not None:
+        places = set()
+        for g in gaps:
+            if g.affects(tick_topic) and g.end is not None:
+                p = placed(own, g)
+                if p.before and p.last + 1 < len(times):
+                    places.add((p.last + 1, min(int(times[p.last]) + 1, int(times[p.last + 1]))))
+        pos = np.array(sorted(p for p, _ in places), np.int64)
+        at = [t for _, t in sorted(places)]
+    else:
+        at = sorted({int(g.start) for g in gaps if g.affects(tick_topic) and g.start is not None
+                     and g.end is not None and times[0] < g.start <= times[-1]})
+        pos = np.searchsorted(times, np.array(at, np.int64), side="left")
     if not at:
         return []
-    pos = np.searchsorted(times, np.array(at, np.int64), side="left")
     src = pos - 1  # the tick before each inserted one gives its placeholder values
     res.times = np.insert(times, pos, np.array(at, np.int64))
     res.columns = {k: np.insert(c, pos, c[src]) for k, c in res.columns.items()}

@@ -18,16 +18,18 @@ from typing import Any, NamedTuple, TYPE_CHECKING
 
 import numpy as np
 
-from fretc.common.streams import log_topics
+from fretc.common.streams import base_topic, log_topics
 from fretc.signals.bindings import Bindings
 from fretc.common.problems import SignalError
 from fretc.signals import blocks_of_ticks, sample, sample_blocks
 from fretc.signals.blocks import MAX_TICKS
 from fretc.signals.csv_columns import csv_columns
 from fretc.logs import CSV_TOPIC, CsvSource
+from fretc.logs.base import Gap
 from fretc.logs.recorded_gaps import LEFT_FOR_GOOD
 from fretc.audit.columns import ClockPass, TickColumns
-from fretc.audit.gaps import gaps_of_clock, inner_gaps, insert_gap_ticks, split_bridged, unknown_masks
+from fretc.audit.gaps import (Placed, gaps_of_clock, inner_gaps, insert_gap_ticks, placed,
+                              split_bridged, unknown_masks)
 from fretc.audit.model import AuditPlan, RequirementPlan
 
 if TYPE_CHECKING:
@@ -103,6 +105,9 @@ class _Clock:
                 if v not in self.names:
                     self.names.append(v)
         topics = sorted(key.topics) if bindings is not None else [CSV_TOPIC]
+        tick = bindings.tick.topic if bindings is not None else None
+        if tick is not None and tick not in topics:  # (where a gap of it goes: KP-176)
+            topics = sorted([*topics, tick])
         self.columns = TickColumns(self.names, topics)
 
 
@@ -192,7 +197,8 @@ def run_passes(plan: AuditPlan, source: LogSource, bindings: Bindings | None,
         cut_at_damage(res, source, bindings, key.topics)
         mark_gaps(res, clock.names, bindings, gaps, key.topics,
                   lost_in_words(source, log_topics(key.topics) if bindings is not None
-                                else [CSV_TOPIC]))
+                                else [CSV_TOPIC]),
+                  bindings is not None and bindings.time_base != "log" and source.kind != "csv")
         if source.kind == "csv":
             csv_marks(res, source, clock.names, bindings)
     out = LogPasses(sampling, passes, failed, errors, gaps, bridged)
@@ -268,7 +274,7 @@ def _left_after_last_tick(res: ClockPass, gone: list) -> None:
 
 
 def mark_gaps(res: ClockPass, names: list[str], bindings: Bindings | None,
-              gaps: list, topics: frozenset, lost: str = "") -> None:
+              gaps: list, topics: frozenset, lost: str = "", header: bool = False) -> None:
     """Set ``res.unknown`` (variable -> ticks it is unknown at) and ``res.gaps`` (the gaps
     that may hold messages of the clock's ``topics``) from the log's inner ``gaps``
     (:func:`fretc.audit.gaps.inner_gaps`, bridged ones removed).
@@ -281,7 +287,9 @@ def mark_gaps(res: ClockPass, names: list[str], bindings: Bindings | None,
     KP-177). Inserted ticks are listed in
     ``res.tick_gaps`` (how many ticks they stand for is not known). ``lost``: the
     messages of the clock's topics present but not decoded, in words
-    (:func:`lost_in_words`), for the reasons given."""
+    (:func:`lost_in_words`), for the reasons given. ``header``: the ticks are header
+    stamps, and each gap is placed among them by the log times of the messages they hold
+    (:func:`fretc.audit.gaps.placed`; KP-176), not by comparing its log times with them."""
     tick_topic = bindings.tick.topic if bindings is not None else None
     # (a gap of the tick topic lost ticks of the clock, whatever its variables read)
     own = gaps_of_clock(gaps, ([*topics, tick_topic] if tick_topic is not None else topics)
@@ -290,15 +298,18 @@ def mark_gaps(res: ClockPass, names: list[str], bindings: Bindings | None,
     res.lost_words = lost
     if not own or not len(res.times):
         return
-    _cut_at_trailing_gap(res, own)
+    cut = _cut_at_trailing_gap(res, own, header)
     if not len(res.times):
         return
+    own = [g for g in own if id(g) not in cut]  # (placed ones: their ticks are cut)
     lag = bindings.header_lag_ns if bindings is not None and bindings.time_base != "log" else 0
     if tick_topic is not None:
-        res.tick_gaps = insert_gap_ticks(res, own, tick_topic)
-    res.unknown = unknown_masks(res.times, res.log_times, names, bindings, own, lag)
+        res.tick_gaps = insert_gap_ticks(res, own, tick_topic, header)
+    res.unknown = unknown_masks(res.times, res.log_times, names, bindings, own, lag, header)
     first = int(res.times[0])
     early = [g.start for g in own if g.start is None or g.start - lag < first]
+    if header and any(not p.before for g in own for p in (_placements(res, g) or ())):
+        early.append(first - 1 + lag)  # (placed before every tick: KP-176)
     if early:
         at = min((s - lag for s in early if s is not None), default=first - 1)
         _insert_first(res, min(at, first - 1))
@@ -308,7 +319,15 @@ def mark_gaps(res: ClockPass, names: list[str], bindings: Bindings | None,
             mask[i] = True
 
 
-def _cut_at_trailing_gap(res: ClockPass, own: list) -> None:
+def _placements(res: ClockPass, g: Gap) -> list[Placed] | None:
+    """Under a header time base, gap ``g`` placed among the clock's ticks by each topic it
+    may hold that the ticks hold (:func:`fretc.audit.gaps.placed`); None: no such topic (the
+    gap is then compared with the ticks' times)."""
+    got = [placed(h, g) for t, h in sorted(res.log_times.items()) if g.affects(base_topic(t))]
+    return got or None
+
+
+def _cut_at_trailing_gap(res: ClockPass, own: list, header: bool = False) -> set[int]:
     """A gap that ends at or after the clock's last tick: nothing after its start was read
     for this clock, as after a cut; the ticks from its start on are dropped. A topic whose
     publisher left a watched run for good (:data:`fretc.logs.recorded_gaps.LEFT_FOR_GOOD`) is
@@ -316,25 +335,42 @@ def _cut_at_trailing_gap(res: ClockPass, own: list) -> None:
     topic's variables are unknown there, so a violation the other topics show is kept. Past
     the clock's last tick it is the end of what this clock read while the run went on: a
     cut after its last tick (:func:`_left_after_last_tick`), as the same requirement watched
-    alone is cut when its only publisher leaves (``publishers_left``)."""
+    alone is cut when its only publisher leaves (``publishers_left``). ``header``: a gap
+    reaches past the last tick when no tick holds a message logged after it, of any topic it
+    may hold, and the ticks are cut from the first that may hold a lost message
+    (:func:`_placements`); returns the ``id`` of each gap so placed and cut (the ticks left
+    hold nothing it lost)."""
     last = int(res.times[-1])
     _left_after_last_tick(res, [g for g in own if g.cause == LEFT_FOR_GOOD
                                 and g.start is not None and g.start > last])
     own = [g for g in own if g.cause != LEFT_FOR_GOOD]
-    starts = [g.start for g in own if g.end is None or g.end >= last]
+    n = len(res.times)
+    places = {id(g): _placements(res, g) if header else None for g in own}
+    trailing = [g for g in own if (g.end is None or g.end >= last) if places[id(g)] is None
+                ] + [g for g in own if (ps := places[id(g)]) is not None
+                     and all(p.last == n - 1 for p in ps)]
+    starts = [g.start for g in trailing]
     if not starts:
-        return
+        return set()
     end = -(2**63) if any(s is None for s in starts) else min(starts)
     keep = int(np.searchsorted(res.times, end, side="left"))
+    cuts = [min(p.first for p in ps) for g in trailing if (ps := places[id(g)]) is not None]
+    if cuts:  # (placed: the tick time where the cut begins)
+        keep = min(cuts) if len(cuts) == len(trailing) else min(keep, *cuts)
+        end = int(res.times[keep]) if keep < n else end
     res.intact_end = end if res.intact_end is None else min(end, res.intact_end)
-    causes = sorted({g.cause or "gap" for g in own if g.end is None or g.end >= last})
+    causes = sorted({g.cause or "gap" for g in trailing})
+    where = (f"log time {end} ns" if not cuts else
+             f"log time {min(starts) if None not in starts else end} ns (placed at tick "
+             f"time {end} ns by the messages held)")
     res.lost = "; ".join(x for x in (res.lost, res.lost_words or (
-        f"a gap ({', '.join(causes)}) from log time {end} ns to past its last tick")) if x)
+        f"a gap ({', '.join(causes)}) from {where} to past its last tick")) if x)
     if keep < len(res.times):
         res.cut += len(res.times) - keep
         res.times = res.times[:keep]
         res.columns = {k: v[:keep] for k, v in res.columns.items()}
         res.log_times = {k: v[:keep] for k, v in res.log_times.items()}
+    return {id(g) for g in trailing if places[id(g)] is not None}
 
 
 def _insert_first(res: ClockPass, at: int) -> None:

@@ -52,7 +52,8 @@ class TickBlock(NamedTuple):
         start: index of the first of them among the clock's evaluated ticks.
         times: int64 tick times (ns, time base).
         values: variable -> 1-D bool or float64 array (variables that failed are absent).
-        log_times: bound topic -> int64 log time (ns) of the message held at each tick.
+        log_times: bound topic (and the tick topic of a clock ticking on one) -> int64 log
+            time (ns) of the message held at each tick.
     """
 
     start: int
@@ -431,7 +432,7 @@ def _evaluate(c: _Group, times: np.ndarray, own: np.ndarray | None) -> TickBlock
         except SignalError as err:
             c.failed[b.name] = err
             c.variables.remove(b)
-    log_times = {t: stream.arrays(t)[1][idx[t]] for t in c.required}
+    log_times = {t: stream.arrays(t)[1][idx[t]] for t in c.own}
     blk = TickBlock(c.index, times, values, log_times)
     c.index += len(times)
     s.ticks += len(times)
