@@ -17,7 +17,8 @@ Roles:
 * ``actions``: a test_msgs/Fibonacci action server ``/fib`` (each goal takes about 0.8 s) and a
   client sending a goal every second.
 * ``controller``: the shield graph's controller and world, once the Safety System and the
-  recorder subscribe to both its topics: ``/cmd_vel`` at 0.4 m/s every 100 ms (always proposing to drive on) and ``/scan`` every 100 ms whose ranges read 0.5 m from
+  recorder subscribe to both its topics: ``/cmd_vel`` at 0.4 m/s every 100 ms (always
+  proposing to drive on) and ``/scan`` (reliable) every 100 ms whose ranges read 0.5 m from
   2 s to 4 s (an obstacle within 0.9 m) and 3 m otherwise, with no scan from 5 s to 6 s.
 * ``passthrough``: the unshielded graph's Safety System: forwards each ``/cmd_vel`` to
   ``/cmd_vel_filtered`` unchanged and publishes ``/gwendolen_control`` true while a scan reads
@@ -41,12 +42,15 @@ from __future__ import annotations
 import json
 import sys
 import time
+from typing import Any
 
 import rclpy
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 
 RELIABLE = QoSProfile(depth=10)
 BEST_EFFORT = QoSProfile(depth=10, reliability=ReliabilityPolicy.BEST_EFFORT)
+#: reliable, a history deep enough for a subscriber stalled for seconds on a loaded machine
+DEEP = QoSProfile(depth=200)
 LATCHED = QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL)
 
 
@@ -227,8 +231,11 @@ def controller(seconds: float, _out: str) -> None:
     from sensor_msgs.msg import LaserScan
 
     n = rclpy.create_node("controller")
-    cmd = n.create_publisher(Twist, "/cmd_vel", RELIABLE)
-    scan = n.create_publisher(LaserScan, "/scan", BEST_EFFORT)
+    cmd = n.create_publisher(Twist, "/cmd_vel", DEEP)
+    # reliable, so that the recorder hears every scan the Safety System could (its
+    # best-effort subscription matches); a scan the recorder alone lost on a loaded machine
+    # read as a dropout the shield never saw (R6 broken in the recording only)
+    scan = n.create_publisher(LaserScan, "/scan", DEEP)
     # the Safety System (shield or passthrough) and the recorder read both topics
     wait_for_subscribers(n, [cmd, scan], 2)
     spin_for(n, 0.5)
@@ -262,7 +269,7 @@ def passthrough(seconds: float, _out: str) -> None:
     spin_until_gone(n, "/cmd_vel")
 
 
-def record(seconds: float, out: str, until: str = "/cmd_vel") -> None:
+def record(seconds: float, out: str, until: str = "/cmd_vel", scan_qos: Any = None) -> None:
     from mcap.writer import Writer
     from rosbags.typesys import Stores, get_typestore
 
@@ -286,7 +293,7 @@ def record(seconds: float, out: str, until: str = "/cmd_vel") -> None:
             cls = getattr(importlib.import_module(pkg + ".msg"), name)
             # the publishers' reliability (as rosbag2 adapts its QoS): a loaded machine
             # drops no message a reliable publisher sent
-            qos = BEST_EFFORT if topic == "/scan" else RELIABLE
+            qos = (scan_qos or DEEP) if topic == "/scan" else DEEP
 
             def cb(raw, info, topic=topic):
                 t = info["source_timestamp"]
@@ -298,7 +305,7 @@ def record(seconds: float, out: str, until: str = "/cmd_vel") -> None:
 
 
 def record_control(seconds: float, out: str) -> None:
-    record(seconds, out, until="/gwendolen_control")
+    record(seconds, out, until="/gwendolen_control", scan_qos=BEST_EFFORT)  # (the lidar's)
 
 
 def lidar(seconds: float, _out: str) -> None:

@@ -183,7 +183,7 @@ def test_the_shield_node_in_a_real_graph_keeps_r2_and_r3(tmp_path, shielded):
     first = _graph_verdicts(tmp_path / "run1", shielded)
     if shielded and not _kept(first[0]):
         got, err = _graph_verdicts(tmp_path / "run2", shielded)
-        assert _kept(got), (got, err[-2000:], "first run", first[0])
+        assert _kept(got), f"second run {got}, first run {first[0]}, {err[-2000:]!r}"
     elif not shielded:
         got = first[0]
         assert got["R2"][0] == "violated" and got["R3"][0] == "violated", got

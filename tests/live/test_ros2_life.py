@@ -87,6 +87,11 @@ def test_a_lidar_that_dies_is_judged_live_as_its_recording_is_audited(tmp_path, 
     got = _verdicts(doc)
     assert got == {"R6": "satisfied" if stop else "violated"}, (doc, err[-2000:])
     assert watch.returncode == (0 if stop else 1), err[-2000:]
-    assert not doc["logs"][0]["partial"], doc["logs"][0].get("problems")
+    # partial only for a message a loaded machine delivered later than the watch's merge
+    # holds one (live/merge.py: skipped and reported as clock_backwards; seen once in 250
+    # long tests beside the other live tests, 134 ms late), never for anything else
+    log = doc["logs"][0]
+    assert not log["partial"] or all(k.split()[0] == "clock_backwards"
+                                     for k in log["problem_counts"]), log.get("problems")
     audit = fretc_run("audit", "-r", req, "-b", b, str(rec), "--no-progress", "--json", "-")
     assert _verdicts(json.loads(audit.stdout)) == got, audit.stderr[-2000:]
