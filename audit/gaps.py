@@ -105,7 +105,7 @@ def _topic_mask(times: np.ndarray, held: np.ndarray, gaps: list[Gap], lag: int,
         if header:  # (KP-176: stamps far from their log times)
             at = placed(held, g)
             after = after | (np.arange(n) >= at.first)
-            nxt = times[at.last + 1] if at.last + 1 < n else _POS
+            nxt = np.append(times, _POS)[at.last + 1]  # (the first tick after the gap)
         stale = after & (held <= end)
         out |= stale
         if stateful:  # the first message after the gap has a lost previous one
