@@ -241,3 +241,50 @@ def test_a_shield_with_preferences_decides_alike_in_java(tmp_path):
                          input="\n".join(lines) + "\n", capture_output=True, text=True,
                          check=True, timeout=300)
     assert ran.stdout.splitlines() == want
+
+
+@pytest.mark.tor("TOR-SHD-006")
+def test_atoms_whose_texts_give_one_term_get_terms_of_their_own():
+    """Four atoms whose texts give the one Gwendolen term ``a_b`` (and an output beside
+    them): each gets a term of its own, numbered in order, none an agent's own name."""
+    from types import SimpleNamespace
+
+    from fretc.shield.emit_gwendolen import AgentAtoms
+
+    def atoms(*texts: str) -> list:
+        return [SimpleNamespace(text=t) for t in texts]
+
+    three = SimpleNamespace(machines=[SimpleNamespace(inputs=atoms("a.b", "a,b", "a;b"),
+                                                      outputs=[])])
+    got = AgentAtoms(three).term  # type: ignore[arg-type]
+    assert got == {"a.b": "a_b", "a,b": "a_b_2", "a;b": "a_b_3"}, got
+    shield = SimpleNamespace(machines=[SimpleNamespace(inputs=atoms("a.b", "a,b", "a;b"),
+                                                       outputs=atoms("a:b", "tick"))])
+    got = AgentAtoms(shield).term  # type: ignore[arg-type]
+    assert got == {"a.b": "a_b", "a,b": "a_b_2", "a;b": "a_b_3", "a:b": "a_b_4",
+                   "tick": "tick_2"}, got
+
+
+@pytest.mark.tor("TOR-SHD-006")
+@pytest.mark.parametrize("then,fallback,want", [
+    # atoms v > 1, v > 2 (one message cannot give 01), the fallback 10: the opposite, 01,
+    # is no message; 00 and 11 are each one atom from it, and 00 comes first
+    ("v > 1 & !(v > 2)", "v=1.5", "{{0, 0}, {1, 0}}"),
+    # the fallback's atoms below the push proposal's: both proposed
+    ("!(v > 1)", "v=0", "{{1}, {0}}")])
+def test_the_controllers_proposals_are_the_nearest_opposite_of_the_fallback_and_the_fallback(
+        tmp_path, then, fallback, want):
+    """The environment's proposals (``push``: the message nearest every output atom the
+    opposite of the fallback's, ties to the first in binary order; ``stop``: the fallback's)
+    for a fallback whose opposite no message gives, and for one below the push proposal."""
+    (tmp_path / "s.fret").write_text(f"S1: whenever x > 5 ctrl shall immediately satisfy {then}\n")
+    (tmp_path / "s.toml").write_text('[tick]\nperiod = "100 ms"\n\n[variables]\n'
+                                     'x = "/x.data"\nv = "/v.data"\n')
+    got = CliRunner().invoke(main, ["shield", str(tmp_path / "s.fret"), "-b",
+                                    str(tmp_path / "s.toml"), "--inputs", "x", "--outputs", "v",
+                                    "--fallback", fallback, "--emit", "gwendolen",
+                                    "-o", str(tmp_path / "out")])
+    assert got.exit_code == 0, got.output
+    env = (tmp_path / "out" / "s_env.java").read_text(encoding="utf-8")
+    assert 'PROPOSAL_NAMES = {"push", "stop"};' in env
+    assert f"PROPOSALS = {want};" in env, re.findall(r"PROPOSALS = .*", env)
