@@ -144,3 +144,25 @@ def test_connection_typestore_uses_the_bag_definition_or_the_fallback():
     assert connection_typestore("rosbag2", bare, ROS2) == (ROS2, "geometry_msgs/msg/Twist")
     with pytest.raises(UnsupportedSchema, match="stores no definition"):
         connection_typestore("rosbag2", bare, None)
+
+
+@pytest.mark.tor("TOR-LOG-001")
+def test_a_service_event_with_a_definition_of_its_own_is_built_from_it():
+    """A rosbag2 service event connection (``pkg/srv/Name_Event``) that carries its own
+    definition is built from it, not from the one the bag stores for the service (which
+    differs here: the request without ``b``); one without a definition is built from the
+    service's."""
+    from fretc.logs.decoding import service_event_text
+
+    name = "example/srv/Add_Event"
+    own = service_event_text(name, "int64 a\nint64 b\n---\nint64 sum\n")
+    stored = {"example/srv/Add": ("ros2msg", "int64 a\n---\nint64 sum\n")}
+
+    def request_fields(msgdef: MessageDefinition) -> list[str]:
+        conn = SimpleNamespace(msgtype=name, msgdef=msgdef)
+        store, _typename = connection_typestore("rosbag2", conn, None, stored)
+        req = next(t for t in store.fielddefs if t.endswith("/Add_Request"))
+        return [f[0] for f in store.get_msgdef(req).fields]
+
+    assert request_fields(MessageDefinition(MessageDefinitionFormat.MSG, own)) == ["a", "b"]
+    assert request_fields(MessageDefinition(MessageDefinitionFormat.NONE, "")) == ["a"]
