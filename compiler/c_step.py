@@ -180,18 +180,31 @@ def _expression(n: Node, a: list[str], code: CStep) -> str | None:
     if op == "neg":
         return f"-{a[0]}"
     if op == "fn":
+        _nan_arguments(n, a, code)
         if _C_FN[name_of(n)].startswith("fretc_"):
             code.helpers.add(_C_FN[name_of(n)])
         return f"{_C_FN[name_of(n)]}({', '.join(a)})"
     if op == "ite":
+        _nan_arguments(n, a, code)
         return f"{a[0]} ? {a[1]} : {a[2]}"
     if op == "pre":
+        _nan_arguments(n, a, code)
         prev = code.add_field("double", "0.0", f"previous value of {_text(n.args[1])}")
         code.uses_first = True
         code.commits.append(f"{prev} = {a[1]};")
         return f"first ? {a[0]} : {prev}"
     form = _C_FORMS.get(op)
     return None if form is None else form.format(*a)
+
+
+def _nan_arguments(n: Node, a: list[str], code: CStep) -> None:
+    """A numeric input given straight to a function (``minReal(x, y)``, ``preReal(0, x)``,
+    ``ite``'s branches) that is NaN makes the tick unread, as the audit's NaN rule reads a
+    variable argument of a call (:func:`fretc.monitors.nan.nan_ticks_of`), even where the
+    function's value does not carry it (``max(0.0, NaN)`` is 0.0)."""
+    for x, arg in zip(a, n.args):
+        if arg.op == "var" and code.types.get(arg) == "double":
+            code.nan_checks.append(f"isnan({x})")
 
 
 def _temporal(n: Node, a: list[str], code: CStep) -> str:

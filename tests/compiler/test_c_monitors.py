@@ -7,6 +7,8 @@ Skipped, with the reason, when no C compiler is found; the FRET vectors need ../
 
 from __future__ import annotations
 
+import math
+
 import random
 import re
 import sys
@@ -175,6 +177,10 @@ MIXED = {
     "N6": "only after q upon p the sw shall within 4 ticks satisfy !r & x >= 1",
     "N7": "when not in m whenever x > 2 the sw shall until q satisfy p",
     "N8": "the sw shall always satisfy x ^ y < 1e300 & (x - y) ^ 0.5 >= 0 | x mod 0 = 0",
+    # a number read as a condition (x, a number by its power) where no comparison reads
+    # its NaN (NaN ^ 0 is 1), and a NaN given to min/max/preReal/ite, which may hide it
+    "N9": "the sw shall always satisfy x ^ 0 >= 1 | x",
+    "N10": "the sw shall always satisfy maxReal(y, x) < 5 & preReal(0, z) < 5",
 }
 _BOOLS = ("too_close", "stopped", "p", "q", "r", "m")
 _NUMS = ("linear_speed", "angular_speed", "x", "y", "z")
@@ -189,7 +195,8 @@ def mixed(tmp_path_factory):
                  True)
 
 
-_numbers = st.one_of(st.integers(-3, 3).map(float), st.sampled_from([0.5, -0.5, 1e308, -0.0]),
+_numbers = st.one_of(st.integers(-3, 3).map(float),
+                     st.sampled_from([0.5, -0.5, 1e308, -0.0, math.nan]),
                      st.floats(-10, 10, allow_nan=False))
 _states = st.fixed_dictionaries({**{v: st.booleans() for v in _BOOLS},
                                  **{v: _numbers for v in _NUMS}})
@@ -220,6 +227,22 @@ def test_hypothesis_traces(mixed, data):
     else:
         assert out["ticks"][:first] == py[:first]
         assert out["finish"] == (-1 if first == 0 else int(py[first - 1][0]))
+
+
+@pytest.mark.tor("TOR-GEN-003")
+@pytest.mark.parametrize("rid,var", [("N9", "x"), ("N10", "x"), ("N10", "z")])
+def test_a_nan_that_no_comparison_reads_is_an_unread_tick_of_the_c_monitor(mixed, rid, var):
+    """A NaN read only as a condition (``x ^ 0 >= 1 | x``: NaN ^ 0 is 1) or given to a
+    function that may hide it (``maxReal(y, x)`` is ``y``; ``preReal(0, z)`` is the previous
+    z): the C monitor stops at that tick, where the audit's NaN rule puts it."""
+    from fretc.monitors.judge import nan_ticks
+
+    base = {**{v: False for v in _BOOLS}, **{v: 0.0 for v in _NUMS}}
+    trace = [base, {**base, var: math.nan}, base]
+    (out,) = mixed.run([(rid, trace)])
+    cols = {v: np.array([x[v] for x in trace]) for v in trace[0]}
+    assert np.flatnonzero(nan_ticks(mixed.compiled[rid].requirement, cols, 3))[0] == 1
+    assert out["unread"] == 1, out
 
 
 def test_random_sentences(tmp_path):
