@@ -130,7 +130,10 @@ def test_proposals_pass_at_the_controllers_rate_and_a_dead_controller_gets_a_sto
     assert stops and (stops[0]["t"] - last) / MS <= TIMEOUT_MS + TICK_MS + BUDGET_MS, \
         (stops[:1], last)
     assert not [c for c in after if c["x"] != 0.0], [c for c in after if c["x"] != 0.0][:3]
-    told = [r for r in _of(rows, "/diagnostics") if r["t"] > last + TIMEOUT_MS * MS]
+    # (while the LiDAR still sends: once it has stopped, the scans' staleness is the fault
+    # said, which a checker started late on a loaded machine hears before it stops)
+    told = [r for r in _of(rows, "/diagnostics")
+            if last + TIMEOUT_MS * MS < r["t"] <= scans[-1]["t"]]
     assert told and all("proposal absent" in r["message"] for r in told), told[:2]
     _audit_with_the_allowance(tmp_path, mcap)
 
