@@ -105,7 +105,6 @@ def _topic_mask(times: np.ndarray, held: np.ndarray, gaps: list[Gap], lag: int,
         if header:  # (KP-176: stamps far from their log times)
             at = placed(held, g)
             after = after | (np.arange(n) >= at.first)
-            nxt = np.append(times, _POS)[at.last + 1]  # (the first tick after the gap)
         stale = after & (held <= end)
         out |= stale
         if stateful:  # the first message after the gap has a lost previous one
@@ -119,6 +118,7 @@ def _topic_mask(times: np.ndarray, held: np.ndarray, gaps: list[Gap], lag: int,
         if span is not None:  # the window (t - span, t] meets the gap
             out |= (times >= start) & ((times - span < end) if span else True)
             if header:
+                nxt = np.append(times, _POS)[at.last + 1]  # (the first tick after the gap)
                 out |= after & ((times - span < nxt) if span else True)
     return out
 
