@@ -108,6 +108,7 @@ class FoxgloveServer:
         self.listener = _Listener()
         self.channels: dict[str, Any] = {}  # topic -> the library's channel or writer
         self._server: Any = None
+        self._stopping = threading.Lock()  # one thread stops the library's server
         self.port = port
         if start:
             self.start()
@@ -165,7 +166,10 @@ class FoxgloveServer:
     def restart(self, down: float = 0.0) -> None:
         """Stop the server (clients are disconnected), wait ``down`` seconds, start it again
         on the same port with the same channels."""
-        self._server.stop()
+        with self._stopping:
+            server, self._server = self._server, None
+        if server is not None:
+            server.stop()
         with self.listener.cond:
             self.listener.subscribed.clear()
         if down:
@@ -179,9 +183,13 @@ class FoxgloveServer:
         self._server = self._start(self.port)
 
     def stop(self) -> None:
-        """Stop the server (nothing when it never started)."""
-        if self._server is not None:
-            self._server.stop()
+        """Stop the server (nothing when it never started or is stopped already). Safe from
+        several threads at once: the library's server is taken by one of them, since two
+        concurrent ``stop`` calls on it raise RuntimeError ("Already borrowed")."""
+        with self._stopping:
+            server, self._server = self._server, None
+        if server is not None:
+            server.stop()
 
 
 class Pacer:
