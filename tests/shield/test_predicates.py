@@ -147,6 +147,7 @@ def test_inputs_compared_together_are_the_environments(tmp_path):
     assert rt.step({"a": 2.0, "b": 1.0}, {"x": False}).outputs == {"x": False}
 
 
+@pytest.mark.tor("TOR-SHD-001")
 @SETTINGS
 @given(text=sets(), run=runs())
 def test_a_shield_over_comparisons_keeps_its_requirements(text, run):

@@ -177,6 +177,10 @@ def test_a_mutated_shield_fails_its_proof(safe_ros):
      "these inputs, tick by tick, defeat every controller: {a=true}"),
     ("R1: whenever a sw shall immediately satisfy x\n", ["--inputs", "a,x", "--outputs", "x"],
      "declared both input and output"),
+    ("R1: whenever x sw shall at the next timepoint satisfy !a\nR2: whenever !x sw shall at "
+     "the next timepoint satisfy a\n", ["--inputs", "a", "--outputs", "x"],
+     "no fixed input sequence defeats every controller (every one has a matching output "
+     "sequence): the environment must react to the outputs"),
 ])
 def test_refusals_are_input_errors_that_say_why(tmp_path, text, args, words):
     f = tmp_path / "r.fret"
