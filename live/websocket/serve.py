@@ -166,10 +166,7 @@ class FoxgloveServer:
     def restart(self, down: float = 0.0) -> None:
         """Stop the server (clients are disconnected), wait ``down`` seconds, start it again
         on the same port with the same channels."""
-        with self._stopping:
-            server, self._server = self._server, None
-        if server is not None:
-            server.stop()
+        self.stop()
         with self.listener.cond:
             self.listener.subscribed.clear()
         if down:
